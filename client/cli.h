@@ -1,0 +1,51 @@
+// Shared pieces of the `sportsim` command-line tool.
+#ifndef SPORTSIM_CLIENT_CLI_H_
+#define SPORTSIM_CLIENT_CLI_H_
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <google/protobuf/message.h>
+#include <grpcpp/channel.h>
+#include <grpcpp/client_context.h>
+#include <grpcpp/support/status.h>
+
+#include "absl/time/time.h"
+
+namespace sportsim::cli {
+
+enum class Format { kText, kJson, kJsonl, kCsv };
+
+struct Context {
+  std::string server;
+  Format format = Format::kText;
+  absl::Duration timeout;
+  std::shared_ptr<grpc::Channel> channel;
+  /// A client context with the deadline set.
+  std::unique_ptr<grpc::ClientContext> NewCall() const;
+};
+
+/// Exit status for usage errors (bad flags or arguments).
+inline constexpr int kUsageExit = 2;
+
+/// Prints "sportsim: CODE_NAME: message" to stderr; returns the exit status (the code number).
+int ReportRpcError(const grpc::Status& status);
+/// Prints "sportsim: usage: message" to stderr; returns kUsageExit.
+int UsageError(std::string_view message);
+
+/// One JSON document (or one line, for jsonl) from a message, with proto field names and every
+/// field present. Protobuf's own JSON printer, not a hand-written one.
+std::string ToJson(const google::protobuf::Message& message, bool one_line);
+
+/// Shortest decimal text that reads back as the same double.
+std::string Num(double v);
+
+int RunInfo(const Context& ctx, const std::vector<std::string>& args);
+int RunHealth(const Context& ctx, const std::vector<std::string>& args);
+int RunSwing(const Context& ctx, const std::vector<std::string>& args);
+
+}  // namespace sportsim::cli
+
+#endif  // SPORTSIM_CLIENT_CLI_H_

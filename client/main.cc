@@ -1,0 +1,187 @@
+// sportsim: the command-line client. `sportsim --help` for commands; DESIGN.md's command-line
+// contract is the reference for flags and JSON keys.
+#include <algorithm>
+#include <charconv>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <google/protobuf/util/json_util.h>
+#include <grpcpp/grpcpp.h>
+
+#include "absl/flags/flag.h"
+#include "absl/flags/parse.h"
+#include "absl/flags/usage.h"
+#include "absl/strings/str_cat.h"
+#include "client/cli.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "sportsim/v1/common.grpc.pb.h"
+
+ABSL_FLAG(std::string, server, "127.0.0.1:50051", "Server address host:port");
+ABSL_FLAG(std::string, format, "text", "Output: text, json, jsonl or csv");
+ABSL_FLAG(absl::Duration, timeout, absl::Seconds(30), "Deadline for each call");
+
+namespace sportsim::cli {
+namespace {
+
+constexpr const char* kUsage = R"(sportsim [--server HOST:PORT] [--format text|json|jsonl|csv] COMMAND ...
+
+Commands:
+  info                      server version, build and capabilities
+  health                    gRPC health check; exit 0 when SERVING
+  swing simulate [flags]    fast-forward one golf swing (Jorgensen's double pendulum):
+      --integrator book|euler|semi_implicit_euler|rk4|dp45  --dt S  --tolerance X
+      --max-step S  --duration S  --until impact|duration  --qalpha NM  --qbeta NM
+      --qbeta-until S  --shoulder-accel MPS2  --gamma DEG  --beta0 DEG
+      --disable gravity,shoulder_accel,wrist_torque  --stride N
+Flags may be written --name value or --name=value; dashes and underscores are the same.
+Errors: the gRPC status code name and message on stderr, exit status = the code number
+(2 for usage errors). --helpfull lists every flag.)";
+
+// absl flag names cannot contain '-': accept --qbeta-until for --qbeta_until.
+std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
+  std::vector<std::string> out;
+  bool flags_done = false;
+  for (int i = 0; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--") flags_done = true;
+    if (!flags_done && i > 0 && a.size() > 2 && a[0] == '-' && a[1] == '-') {
+      const size_t end = a.find('=');
+      for (size_t j = 2; j < std::min(end, a.size()); ++j) {
+        if (a[j] == '-') a[j] = '_';
+      }
+    }
+    out.push_back(std::move(a));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::unique_ptr<grpc::ClientContext> Context::NewCall() const {
+  auto c = std::make_unique<grpc::ClientContext>();
+  c->set_deadline(absl::ToChronoTime(absl::Now() + timeout));
+  return c;
+}
+
+int ReportRpcError(const grpc::Status& status) {
+  static constexpr const char* kNames[] = {
+      "OK",        "CANCELLED",          "UNKNOWN",        "INVALID_ARGUMENT",
+      "DEADLINE_EXCEEDED", "NOT_FOUND",  "ALREADY_EXISTS", "PERMISSION_DENIED",
+      "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE",
+      "UNIMPLEMENTED", "INTERNAL",       "UNAVAILABLE",    "DATA_LOSS",
+      "UNAUTHENTICATED"};
+  const int code = static_cast<int>(status.error_code());
+  const char* name = code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
+  std::cerr << "sportsim: " << name << ": " << status.error_message() << "\n";
+  return code == 0 ? 1 : code;
+}
+
+int UsageError(std::string_view message) {
+  std::cerr << "sportsim: usage: " << message << "\n";
+  return kUsageExit;
+}
+
+std::string ToJson(const google::protobuf::Message& message, bool one_line) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.always_print_primitive_fields = true;
+  options.add_whitespace = !one_line;
+  std::string out;
+  (void)google::protobuf::util::MessageToJsonString(message, &out, options);
+  return out;
+}
+
+std::string Num(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+int RunInfo(const Context& ctx, const std::vector<std::string>& args) {
+  if (!args.empty()) return UsageError("info takes no arguments");
+  auto stub = v1::Server::NewStub(ctx.channel);
+  v1::GetInfoResponse info;
+  const grpc::Status status = stub->GetInfo(ctx.NewCall().get(), v1::GetInfoRequest(), &info);
+  if (!status.ok()) return ReportRpcError(status);
+  if (ctx.format == Format::kJson || ctx.format == Format::kJsonl) {
+    std::cout << ToJson(info, ctx.format == Format::kJsonl) << "\n";
+    return 0;
+  }
+  if (ctx.format == Format::kCsv) return UsageError("info has no csv form");
+  const v1::Capabilities& c = info.capabilities();
+  const auto list = [](const auto& items) {
+    std::string s;
+    for (const auto& i : items) absl::StrAppend(&s, s.empty() ? "" : ", ", i);
+    return s.empty() ? std::string("(none yet)") : s;
+  };
+  std::cout << "sportsim " << info.version() << " (" << info.build_type() << ", "
+            << info.compiler() << ", gRPC " << info.grpc_version() << ", protobuf "
+            << info.protobuf_version() << ") at " << ctx.server << "\n"
+            << "  billiards engines:     " << list(c.engines()) << "\n"
+            << "  billiards integrators: " << list(c.integrators()) << "\n"
+            << "  table presets:         " << list(c.table_presets()) << "\n"
+            << "  racks:                 " << list(c.racks()) << "\n"
+            << "  swing integrators:     " << list(c.swing_integrators()) << "\n"
+            << "  swing effects:         " << list(c.swing_effects()) << "\n"
+            << "  services:              " << list(c.services()) << "\n"
+            << "  swing parameters:\n";
+  for (const v1::ParameterInfo& p : c.swing_parameters()) {
+    std::printf("    %-24s default %-10.6g range [%g, %g] %s  %s\n", p.name().c_str(),
+                p.default_value(), p.min_value(), p.max_value(), p.unit().c_str(),
+                p.description().c_str());
+  }
+  return 0;
+}
+
+int RunHealth(const Context& ctx, const std::vector<std::string>& args) {
+  if (args.size() > 1) return UsageError("health takes at most one argument: a service name");
+  auto stub = grpc::health::v1::Health::NewStub(ctx.channel);
+  grpc::health::v1::HealthCheckRequest request;
+  if (!args.empty()) request.set_service(args[0]);
+  grpc::health::v1::HealthCheckResponse response;
+  const grpc::Status status = stub->Check(ctx.NewCall().get(), request, &response);
+  if (!status.ok()) return ReportRpcError(status);
+  const std::string name = grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
+  if (ctx.format == Format::kJson || ctx.format == Format::kJsonl) {
+    std::cout << ToJson(response, ctx.format == Format::kJsonl) << "\n";
+  } else {
+    std::cout << name << "\n";
+  }
+  return response.status() == grpc::health::v1::HealthCheckResponse::SERVING ? 0 : 1;
+}
+
+}  // namespace sportsim::cli
+
+int main(int argc, char** argv) {
+  using namespace sportsim::cli;
+  absl::SetProgramUsageMessage(kUsage);
+  std::vector<std::string> normalized = NormalizeFlagNames(argc, argv);
+  std::vector<char*> args_c;
+  for (std::string& s : normalized) args_c.push_back(s.data());
+  std::vector<char*> positional =
+      absl::ParseCommandLine(static_cast<int>(args_c.size()), args_c.data());
+
+  Context ctx;
+  ctx.server = absl::GetFlag(FLAGS_server);
+  ctx.timeout = absl::GetFlag(FLAGS_timeout);
+  const std::string format = absl::GetFlag(FLAGS_format);
+  if (format == "text") ctx.format = Format::kText;
+  else if (format == "json") ctx.format = Format::kJson;
+  else if (format == "jsonl") ctx.format = Format::kJsonl;
+  else if (format == "csv") ctx.format = Format::kCsv;
+  else return UsageError("--format must be text, json, jsonl or csv, got '" + format + "'");
+
+  if (positional.size() < 2) {
+    std::cerr << kUsage << "\n";
+    return kUsageExit;
+  }
+  const std::string command = positional[1];
+  std::vector<std::string> rest(positional.begin() + 2, positional.end());
+  ctx.channel = grpc::CreateChannel(ctx.server, grpc::InsecureChannelCredentials());
+  if (command == "info") return RunInfo(ctx, rest);
+  if (command == "health") return RunHealth(ctx, rest);
+  if (command == "swing") return RunSwing(ctx, rest);
+  return UsageError("unknown command '" + command + "' (info, health, swing)");
+}

@@ -1,0 +1,146 @@
+// `sportsim swing ...`
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+
+#include "absl/flags/flag.h"
+#include "absl/strings/str_split.h"
+#include "client/cli.h"
+#include "sportsim/v1/swing.grpc.pb.h"
+
+ABSL_FLAG(std::string, integrator, "rk4", "Swing integrator: book|euler|semi_implicit_euler|rk4|dp45");
+ABSL_FLAG(std::optional<double>, dt, std::nullopt, "Fixed step (s); default 0.0025");
+ABSL_FLAG(std::optional<double>, tolerance, std::nullopt, "dp45 tolerance; default 1e-8");
+ABSL_FLAG(std::optional<double>, max_step, std::nullopt, "dp45 largest step (s); default 0.01");
+ABSL_FLAG(std::optional<double>, duration, std::nullopt,
+          "Run length (s) for --until duration (default 0.5), cap for --until impact (default 2)");
+ABSL_FLAG(std::string, until, "impact", "Stop at: impact or duration");
+ABSL_FLAG(std::optional<double>, qalpha, std::nullopt, "Shoulder torque (N m), constant; default 100");
+ABSL_FLAG(std::optional<double>, qbeta, std::nullopt, "Wrist torque (N m) until --qbeta-until, then 0; default -10");
+ABSL_FLAG(std::optional<double>, qbeta_until, std::nullopt, "When the wrist torque stops (s); default 0.1");
+ABSL_FLAG(std::optional<double>, shoulder_accel, std::nullopt, "Shoulder acceleration toward the target (m/s^2); default 0.98");
+ABSL_FLAG(std::optional<double>, gamma, std::nullopt, "Arm angle at the top of the backswing (deg); default 135");
+ABSL_FLAG(std::optional<double>, beta0, std::nullopt, "Initial wrist cock (deg); default 120");
+ABSL_FLAG(std::vector<std::string>, disable, {}, "Swing effects to switch off: gravity,shoulder_accel,wrist_torque");
+ABSL_FLAG(int, stride, 0, "Keep every n-th step as a sample (0: automatic)");
+
+namespace sportsim::cli {
+namespace {
+
+std::optional<v1::SwingIntegrator> IntegratorFromName(const std::string& name) {
+  if (name == "book") return v1::SWING_INTEGRATOR_BOOK;
+  if (name == "euler") return v1::SWING_INTEGRATOR_EULER;
+  if (name == "semi_implicit_euler") return v1::SWING_INTEGRATOR_SEMI_IMPLICIT_EULER;
+  if (name == "rk4") return v1::SWING_INTEGRATOR_RK4;
+  if (name == "dp45") return v1::SWING_INTEGRATOR_DP45;
+  return std::nullopt;
+}
+
+// Builds the request from the flags; returns a usage message on bad flags.
+std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
+  const std::optional<v1::SwingIntegrator> integrator =
+      IntegratorFromName(absl::GetFlag(FLAGS_integrator));
+  if (!integrator) {
+    return "--integrator must be book, euler, semi_implicit_euler, rk4 or dp45, got '" +
+           absl::GetFlag(FLAGS_integrator) + "'";
+  }
+  r->mutable_solver()->set_integrator(*integrator);
+  if (auto v = absl::GetFlag(FLAGS_dt)) r->mutable_solver()->set_dt_s(*v);
+  if (auto v = absl::GetFlag(FLAGS_tolerance)) r->mutable_solver()->set_tolerance(*v);
+  if (auto v = absl::GetFlag(FLAGS_max_step)) r->mutable_solver()->set_max_step_s(*v);
+  const std::string until = absl::GetFlag(FLAGS_until);
+  if (until == "impact") r->set_stop(v1::SWING_STOP_IMPACT);
+  else if (until == "duration") r->set_stop(v1::SWING_STOP_DURATION);
+  else return "--until must be impact or duration, got '" + until + "'";
+  if (auto v = absl::GetFlag(FLAGS_duration)) r->set_duration_s(*v);
+
+  v1::SwingParameters* p = r->mutable_parameters();
+  if (auto v = absl::GetFlag(FLAGS_shoulder_accel)) p->set_shoulder_accel_mps2(*v);
+  if (auto v = absl::GetFlag(FLAGS_gamma)) p->set_gamma_deg(*v);
+  if (auto v = absl::GetFlag(FLAGS_beta0)) p->set_beta0_deg(*v);
+
+  // Torques: the chapter's program with the flags' changes.
+  const auto qa = absl::GetFlag(FLAGS_qalpha);
+  const auto qb = absl::GetFlag(FLAGS_qbeta);
+  const auto qb_until = absl::GetFlag(FLAGS_qbeta_until);
+  if (qa || qb || qb_until) {
+    v1::TorqueKnot* k = r->mutable_torques()->mutable_qalpha()->add_knots();
+    k->set_t_s(0);
+    k->set_torque_nm(qa.value_or(100.0));
+    v1::TorqueSchedule* b = r->mutable_torques()->mutable_qbeta();
+    b->add_knots()->set_torque_nm(qb.value_or(-10.0));
+    v1::TorqueKnot* off = b->add_knots();
+    off->set_t_s(qb_until.value_or(0.1));
+    off->set_torque_nm(0.0);
+  }
+  for (const std::string& e : absl::GetFlag(FLAGS_disable)) {
+    if (e == "gravity") r->add_disabled_effects(v1::SWING_EFFECT_GRAVITY);
+    else if (e == "shoulder_accel") r->add_disabled_effects(v1::SWING_EFFECT_SHOULDER_ACCEL);
+    else if (e == "wrist_torque") r->add_disabled_effects(v1::SWING_EFFECT_WRIST_TORQUE);
+    else return "--disable takes gravity, shoulder_accel, wrist_torque; got '" + e + "'";
+  }
+  const int stride = absl::GetFlag(FLAGS_stride);
+  if (stride < 0) return "--stride must be >= 0";
+  r->set_sample_stride(static_cast<uint32_t>(stride));
+  return std::nullopt;
+}
+
+void PrintText(const v1::SimulateSwingResponse& r) {
+  if (r.has_impact()) {
+    const v1::SwingImpact& i = r.impact();
+    std::printf(
+        "impact at t = %.9f s\n"
+        "  clubhead speed  %.4f m/s relative to the shoulder, %.4f m/s over the ground\n"
+        "  alpha %.4f deg  beta %.4f deg  theta %.4f deg\n"
+        "  alpha_dot %.4f rad/s  beta_dot %.4f rad/s  direction %.2f deg above horizontal\n",
+        i.t_s(), i.clubhead_speed_mps(), i.clubhead_speed_ground_mps(), i.alpha_deg(),
+        i.beta_deg(), i.theta_deg(), i.alpha_dot_rps(), i.beta_dot_rps(),
+        i.clubhead_direction_deg());
+  } else {
+    std::printf("no impact before t = %.6f s\n", r.end_t_s());
+  }
+  std::printf("%u steps (%u rejected), %u force evaluations, %d samples, %.3f ms CPU\n",
+              r.steps(), r.rejected_steps(), r.rhs_evaluations(), r.samples_size(),
+              r.cpu_s() * 1e3);
+}
+
+void PrintCsv(const v1::SimulateSwingResponse& r) {
+  std::cout << "t_s,theta_deg,alpha_deg,beta_deg,phi_deg,clubhead_speed_mps\n";
+  for (const v1::SwingSample& s : r.samples()) {
+    std::cout << Num(s.t_s()) << ',' << Num(s.theta_deg()) << ',' << Num(s.alpha_deg()) << ','
+              << Num(s.beta_deg()) << ',' << Num(s.phi_deg()) << ','
+              << Num(s.clubhead_speed_mps()) << '\n';
+  }
+}
+
+int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
+  if (!args.empty()) return UsageError("swing simulate takes flags only, got '" + args[0] + "'");
+  v1::SimulateSwingRequest request;
+  if (auto bad = BuildRequest(&request)) return UsageError(*bad);
+  auto stub = v1::Swing::NewStub(ctx.channel);
+  v1::SimulateSwingResponse response;
+  const grpc::Status status = stub->SimulateSwing(ctx.NewCall().get(), request, &response);
+  if (!status.ok()) return ReportRpcError(status);
+  switch (ctx.format) {
+    case Format::kJson: std::cout << ToJson(response, false) << "\n"; break;
+    case Format::kJsonl: std::cout << ToJson(response, true) << "\n"; break;
+    case Format::kCsv: PrintCsv(response); break;
+    case Format::kText: PrintText(response); break;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int RunSwing(const Context& ctx, const std::vector<std::string>& args) {
+  if (args.empty()) return UsageError("swing needs a subcommand: simulate");
+  const std::vector<std::string> rest(args.begin() + 1, args.end());
+  if (args[0] == "simulate") return RunSimulate(ctx, rest);
+  return UsageError("unknown swing subcommand '" + args[0] + "' (simulate)");
+}
+
+}  // namespace sportsim::cli

@@ -1,0 +1,144 @@
+#include "server/server_app.h"
+
+#include <netdb.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <charconv>
+#include <cstring>
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "server/services.h"
+
+namespace sportsim::server {
+namespace {
+
+// Binds a throwaway socket to learn, with the OS's own words, whether gRPC will be able to
+// listen there (gRPC's own failure is a multi-line log and a null server).
+absl::Status CheckBindable(const ListenAddress& a) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+  addrinfo* res = nullptr;
+  const std::string port = std::to_string(a.port);
+  const int rc = getaddrinfo(a.host.c_str(), port.c_str(), &hints, &res);
+  if (rc != 0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("cannot resolve host '%s': %s", a.host, gai_strerror(rc)));
+  }
+  absl::Status status = absl::OkStatus();
+  for (addrinfo* ai = res; ai != nullptr; ai = ai->ai_next) {
+    const int fd = socket(ai->ai_family, ai->ai_socktype, ai->ai_protocol);
+    if (fd < 0) continue;
+    const int one = 1;
+    setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof(one));
+    if (bind(fd, ai->ai_addr, ai->ai_addrlen) != 0) {
+      status = absl::UnavailableError(
+          absl::StrFormat("cannot listen on %s:%d: %s", a.host, a.port, std::strerror(errno)));
+    }
+    close(fd);
+    break;  // gRPC binds the first address that resolves; so do we
+  }
+  freeaddrinfo(res);
+  return status;
+}
+
+}  // namespace
+
+absl::StatusOr<ListenAddress> ParseListenAddress(std::string_view address) {
+  const auto bad = [&](std::string_view why) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "--listen must be host:port or [ipv6]:port with a port in [0, 65535], got '%s' (%s)",
+        address, why));
+  };
+  ListenAddress out;
+  std::string_view port;
+  if (!address.empty() && address.front() == '[') {
+    const size_t close = address.find(']');
+    if (close == std::string_view::npos || close + 1 >= address.size() ||
+        address[close + 1] != ':') {
+      return bad("unterminated [ipv6] or missing :port");
+    }
+    out.host = std::string(address.substr(1, close - 1));
+    port = address.substr(close + 2);
+  } else {
+    const size_t colon = address.rfind(':');
+    if (colon == std::string_view::npos) return bad("missing :port");
+    out.host = std::string(address.substr(0, colon));
+    if (out.host.find(':') != std::string::npos) return bad("an IPv6 host needs [brackets]");
+    port = address.substr(colon + 1);
+  }
+  if (out.host.empty()) return bad("empty host");
+  int value = -1;
+  const auto [ptr, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
+  if (port.empty() || ec != std::errc() || ptr != port.data() + port.size() || value < 0 ||
+      value > 65535) {
+    return bad("bad port");
+  }
+  out.port = value;
+  return out;
+}
+
+absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& config) {
+  absl::StatusOr<ListenAddress> address = ParseListenAddress(config.listen);
+  if (!address.ok()) return address.status();
+  if (address->port != 0) {
+    if (absl::Status s = CheckBindable(*address); !s.ok()) return s;
+  }
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+
+  std::unique_ptr<ServerApp> app(new ServerApp());
+  app->host_ = address->host;
+  app->services_.push_back(MakeInfoService());
+  app->services_.push_back(MakeSwingService());
+
+  grpc::ServerBuilder builder;
+  // Without this, gRPC sets SO_REUSEPORT and a second server would share a busy port silently.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+  builder.SetMaxReceiveMessageSize(config.max_receive_message_bytes);
+  builder.SetMaxSendMessageSize(config.max_send_message_bytes);
+  const std::string target = address->host.find(':') != std::string::npos
+                                 ? absl::StrCat("[", address->host, "]:", address->port)
+                                 : absl::StrCat(address->host, ":", address->port);
+  builder.AddListeningPort(target, grpc::InsecureServerCredentials(), &app->port_);
+  for (auto& service : app->services_) builder.RegisterService(service.get());
+  app->server_ = builder.BuildAndStart();
+  if (app->server_ == nullptr || app->port_ == 0) {
+    return absl::UnavailableError(absl::StrFormat("cannot listen on %s", target));
+  }
+  app->server_->GetHealthCheckService()->SetServingStatus(true);
+  return app;
+}
+
+ServerApp::~ServerApp() {
+  Shutdown(absl::ZeroDuration());
+  Wait();
+}
+
+std::string ServerApp::address() const {
+  return host_.find(':') != std::string::npos ? absl::StrCat("[", host_, "]:", port_)
+                                               : absl::StrCat(host_, ":", port_);
+}
+
+void ServerApp::Shutdown(absl::Duration grace) {
+  if (shut_down_ || server_ == nullptr) return;
+  shut_down_ = true;
+  server_->GetHealthCheckService()->SetServingStatus(false);
+  server_->Shutdown(absl::ToChronoTime(absl::Now() + grace));
+}
+
+void ServerApp::Wait() {
+  if (server_ != nullptr) server_->Wait();
+}
+
+}  // namespace sportsim::server

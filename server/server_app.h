@@ -1,0 +1,63 @@
+// Builds, starts and stops the sportsim gRPC server (used by main.cc and in-process tests).
+#ifndef SPORTSIM_SERVER_SERVER_APP_H_
+#define SPORTSIM_SERVER_SERVER_APP_H_
+
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "absl/time/time.h"
+
+namespace grpc {
+class Server;
+class Service;
+}  // namespace grpc
+
+namespace sportsim::server {
+
+struct ServerConfig {
+  std::string listen = "127.0.0.1:50051";  ///< host:port ([v6]:port); port 0 = any free port
+  int max_receive_message_bytes = 1 << 20;  ///< requests are small: 1 MiB
+  int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
+};
+
+/// host and port of a listen address.
+struct ListenAddress {
+  std::string host;
+  int port = 0;
+};
+
+/// Parses "host:port" or "[ipv6]:port" with a port in [0, 65535].
+absl::StatusOr<ListenAddress> ParseListenAddress(std::string_view address);
+
+/// A running server. Destroying it shuts it down.
+class ServerApp {
+ public:
+  /// Starts serving. Errors: a malformed address (INVALID_ARGUMENT), an address that cannot be
+  /// bound, e.g. a port in use (UNAVAILABLE).
+  static absl::StatusOr<std::unique_ptr<ServerApp>> Start(const ServerConfig& config);
+  ~ServerApp();
+
+  int port() const { return port_; }
+  std::string address() const;
+
+  /// Marks health NOT_SERVING, stops accepting, lets in-flight calls finish for up to `grace`,
+  /// then cancels what is left. Idempotent.
+  void Shutdown(absl::Duration grace);
+  /// Blocks until the server has shut down.
+  void Wait();
+
+ private:
+  ServerApp() = default;
+  std::vector<std::unique_ptr<grpc::Service>> services_;
+  std::unique_ptr<grpc::Server> server_;
+  std::string host_;
+  int port_ = 0;
+  bool shut_down_ = false;
+};
+
+}  // namespace sportsim::server
+
+#endif  // SPORTSIM_SERVER_SERVER_APP_H_

@@ -1,0 +1,93 @@
+#include "server/services.h"
+
+#include <ctime>
+
+#include <google/protobuf/stubs/common.h>
+#include <grpcpp/grpcpp.h>
+
+#include "server/status_util.h"
+#include "server/swing_convert.h"
+#include "sim/swing/swing_simulation.h"
+#include "sportsim/v1/common.grpc.pb.h"
+#include "sportsim/v1/swing.grpc.pb.h"
+
+#ifndef SPORTSIM_VERSION
+#define SPORTSIM_VERSION "unknown"
+#endif
+#ifndef SPORTSIM_BUILD_TYPE
+#define SPORTSIM_BUILD_TYPE "unknown"
+#endif
+#ifndef SPORTSIM_COMPILER
+#define SPORTSIM_COMPILER "unknown"
+#endif
+
+namespace sportsim::server {
+namespace {
+
+// CPU time of the calling thread (s): what a request cost, whatever the machine's load.
+double ThreadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+class InfoService final : public v1::Server::CallbackService {
+  grpc::ServerUnaryReactor* GetInfo(grpc::CallbackServerContext* ctx, const v1::GetInfoRequest*,
+                                    v1::GetInfoResponse* response) override {
+    *response = MakeServerInfo();
+    auto* reactor = ctx->DefaultReactor();
+    reactor->Finish(grpc::Status::OK);
+    return reactor;
+  }
+};
+
+class SwingService final : public v1::Swing::CallbackService {
+  grpc::ServerUnaryReactor* SimulateSwing(grpc::CallbackServerContext* ctx,
+                                          const v1::SimulateSwingRequest* request,
+                                          v1::SimulateSwingResponse* response) override {
+    auto* reactor = ctx->DefaultReactor();
+    reactor->Finish(ToGrpcStatus(Simulate(*request, response)));
+    return reactor;
+  }
+
+  static absl::Status Simulate(const v1::SimulateSwingRequest& request,
+                               v1::SimulateSwingResponse* response) {
+    absl::StatusOr<SwingJob> job = SwingJobFromProto(request);
+    if (!job.ok()) return job.status();
+    const double cpu0 = ThreadCpuSeconds();
+    absl::StatusOr<swing::SwingRunResult> result =
+        swing::SimulateSwing(job->model, job->program, job->solver, job->run);
+    const double cpu_s = ThreadCpuSeconds() - cpu0;
+    if (!result.ok()) return result.status();
+    SwingResultToProto(*result, cpu_s, response);
+    return absl::OkStatus();
+  }
+};
+
+}  // namespace
+
+v1::GetInfoResponse MakeServerInfo() {
+  v1::GetInfoResponse info;
+  info.set_version(SPORTSIM_VERSION);
+  info.set_build_type(SPORTSIM_BUILD_TYPE);
+  info.set_compiler(SPORTSIM_COMPILER);
+  info.set_grpc_version(grpc::Version());
+  info.set_protobuf_version(
+      google::protobuf::internal::VersionString(GOOGLE_PROTOBUF_VERSION));
+  v1::Capabilities* caps = info.mutable_capabilities();
+  for (swing::SwingIntegrator i : swing::kAllSwingIntegrators) {
+    caps->add_swing_integrators(std::string(swing::SwingIntegratorName(i)));
+  }
+  for (const std::string& e : SwingEffectNames()) caps->add_swing_effects(e);
+  for (v1::ParameterInfo& p : SwingParameterInfo()) *caps->add_swing_parameters() = std::move(p);
+  caps->add_services(v1::Server::service_full_name());
+  caps->add_services(v1::Swing::service_full_name());
+  caps->add_services("grpc.health.v1.Health");
+  caps->add_services("grpc.reflection.v1alpha.ServerReflection");
+  return info;
+}
+
+std::unique_ptr<grpc::Service> MakeInfoService() { return std::make_unique<InfoService>(); }
+std::unique_ptr<grpc::Service> MakeSwingService() { return std::make_unique<SwingService>(); }
+
+}  // namespace sportsim::server

@@ -1,0 +1,21 @@
+// The gRPC services: thin translation from proto to sim calls and back.
+#ifndef SPORTSIM_SERVER_SERVICES_H_
+#define SPORTSIM_SERVER_SERVICES_H_
+
+#include <memory>
+
+#include <grpcpp/impl/codegen/service_type.h>
+
+#include "sportsim/v1/common.pb.h"
+
+namespace sportsim::server {
+
+/// The capabilities this build serves (also used by tests).
+v1::GetInfoResponse MakeServerInfo();
+
+std::unique_ptr<grpc::Service> MakeInfoService();
+std::unique_ptr<grpc::Service> MakeSwingService();
+
+}  // namespace sportsim::server
+
+#endif  // SPORTSIM_SERVER_SERVICES_H_

@@ -1,0 +1,249 @@
+#include "server/swing_convert.h"
+
+#include <cmath>
+#include <string_view>
+
+#include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "sim/core/units.h"
+
+namespace sportsim::server {
+namespace {
+
+using swing::Interpolation;
+using swing::SwingIntegrator;
+
+absl::Status Prefixed(absl::string_view prefix, const absl::Status& s) {
+  return absl::Status(s.code(), absl::StrCat(prefix, s.message()));
+}
+
+absl::Status CheckAngleDeg(std::string_view name, double deg) {
+  if (std::isfinite(deg) && deg >= -360.0 && deg <= 360.0) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrFormat("parameters.%s must be finite and in [-360, 360] deg, got %g", name, deg));
+}
+
+absl::StatusOr<swing::TorqueSchedule> ScheduleFromProto(std::string_view name,
+                                                        const v1::TorqueSchedule& s) {
+  swing::TorqueSchedule out;
+  switch (s.interpolation()) {
+    case v1::INTERPOLATION_UNSPECIFIED:
+    case v1::INTERPOLATION_PIECEWISE_CONSTANT:
+      out.interpolation = Interpolation::kPiecewiseConstant;
+      break;
+    case v1::INTERPOLATION_PIECEWISE_LINEAR:
+      out.interpolation = Interpolation::kPiecewiseLinear;
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "torques.%s.interpolation: unknown value %d", name, static_cast<int>(s.interpolation())));
+  }
+  if (s.knots_size() > swing::TorqueProgram::kMaxKnots) {
+    // Refuse before copying an oversized list.
+    return absl::InvalidArgumentError(absl::StrFormat("torques.%s.knots must have 1 to %d knots, got %d",
+                                                      name, swing::TorqueProgram::kMaxKnots,
+                                                      s.knots_size()));
+  }
+  for (const v1::TorqueKnot& k : s.knots()) out.knots.push_back({k.t_s(), k.torque_nm()});
+  return out;
+}
+
+}  // namespace
+
+absl::StatusOr<swing::SwingModel> SwingModelFromProto(
+    const v1::SwingParameters& p, const google::protobuf::RepeatedField<int>& disabled_effects) {
+  swing::SwingParams params;
+  if (p.has_arm_inertia_kgm2()) params.arm_inertia_kgm2 = p.arm_inertia_kgm2();
+  if (p.has_arm_length_m()) params.arm_length_m = p.arm_length_m();
+  if (p.has_arm_first_moment_kgm()) params.arm_first_moment_kgm = p.arm_first_moment_kgm();
+  if (p.has_club_inertia_kgm2()) params.club_inertia_kgm2 = p.club_inertia_kgm2();
+  if (p.has_club_mass_kg()) params.club_mass_kg = p.club_mass_kg();
+  if (p.has_club_length_m()) params.club_length_m = p.club_length_m();
+  if (p.has_club_first_moment_kgm()) params.club_first_moment_kgm = p.club_first_moment_kgm();
+  if (p.has_gravity_mps2()) params.gravity_mps2 = p.gravity_mps2();
+  if (p.has_shoulder_accel_mps2()) params.shoulder_accel_mps2 = p.shoulder_accel_mps2();
+  if (p.has_gamma_deg()) {
+    if (absl::Status s = CheckAngleDeg("gamma_deg", p.gamma_deg()); !s.ok()) return s;
+    params.gamma_rad = DegToRad(p.gamma_deg());
+  }
+  if (p.has_beta0_deg()) {
+    if (absl::Status s = CheckAngleDeg("beta0_deg", p.beta0_deg()); !s.ok()) return s;
+    params.beta0_rad = DegToRad(p.beta0_deg());
+  }
+  uint32_t disabled = 0;
+  for (int i = 0; i < disabled_effects.size(); ++i) {
+    switch (disabled_effects.Get(i)) {
+      case v1::SWING_EFFECT_GRAVITY: disabled |= swing::kSwingGravity; break;
+      case v1::SWING_EFFECT_SHOULDER_ACCEL: disabled |= swing::kSwingShoulderAccel; break;
+      case v1::SWING_EFFECT_WRIST_TORQUE: disabled |= swing::kSwingWristTorque; break;
+      default:
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "disabled_effects[%d]: unknown effect %d", i, disabled_effects.Get(i)));
+    }
+  }
+  absl::StatusOr<swing::SwingModel> model = swing::SwingModel::Create(params, disabled);
+  if (!model.ok()) return Prefixed("parameters.", model.status());
+  return model;
+}
+
+absl::StatusOr<swing::TorqueProgram> TorqueProgramFromProto(const v1::TorqueProgram& program,
+                                                            bool has_program) {
+  const swing::TorqueProgram chapter = swing::TorqueProgram::Chapter();
+  if (!has_program) return chapter;
+  swing::TorqueSchedule qa = chapter.q_alpha(), qb = chapter.q_beta();
+  if (program.has_qalpha()) {
+    absl::StatusOr<swing::TorqueSchedule> s = ScheduleFromProto("qalpha", program.qalpha());
+    if (!s.ok()) return s.status();
+    qa = *std::move(s);
+  }
+  if (program.has_qbeta()) {
+    absl::StatusOr<swing::TorqueSchedule> s = ScheduleFromProto("qbeta", program.qbeta());
+    if (!s.ok()) return s.status();
+    qb = *std::move(s);
+  }
+  absl::StatusOr<swing::TorqueProgram> out = swing::TorqueProgram::Create(qa, qb);
+  if (!out.ok()) return Prefixed("torques.", out.status());
+  return out;
+}
+
+absl::StatusOr<swing::SwingSolverOptions> SwingSolverFromProto(const v1::SwingSolver& s) {
+  swing::SwingSolverOptions o;
+  switch (s.integrator()) {
+    case v1::SWING_INTEGRATOR_UNSPECIFIED:
+    case v1::SWING_INTEGRATOR_RK4: o.integrator = SwingIntegrator::kRk4; break;
+    case v1::SWING_INTEGRATOR_BOOK: o.integrator = SwingIntegrator::kBook; break;
+    case v1::SWING_INTEGRATOR_EULER: o.integrator = SwingIntegrator::kEuler; break;
+    case v1::SWING_INTEGRATOR_SEMI_IMPLICIT_EULER:
+      o.integrator = SwingIntegrator::kSemiImplicitEuler;
+      break;
+    case v1::SWING_INTEGRATOR_DP45: o.integrator = SwingIntegrator::kDp45; break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat("solver.integrator: unknown value %d",
+                                                        static_cast<int>(s.integrator())));
+  }
+  if (s.has_dt_s()) o.dt_s = s.dt_s();
+  if (s.has_tolerance()) o.tolerance = s.tolerance();
+  if (s.has_max_step_s()) o.max_step_s = s.max_step_s();
+  if (absl::Status st = swing::ValidateSolverOptions(o); !st.ok()) return Prefixed("solver.", st);
+  return o;
+}
+
+absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& r) {
+  absl::StatusOr<swing::SwingModel> model = SwingModelFromProto(r.parameters(), r.disabled_effects());
+  if (!model.ok()) return model.status();
+  absl::StatusOr<swing::TorqueProgram> program = TorqueProgramFromProto(r.torques(), r.has_torques());
+  if (!program.ok()) return program.status();
+  absl::StatusOr<swing::SwingSolverOptions> solver = SwingSolverFromProto(r.solver());
+  if (!solver.ok()) return solver.status();
+
+  swing::SwingRunOptions run;
+  switch (r.stop()) {
+    case v1::SWING_STOP_UNSPECIFIED:
+    case v1::SWING_STOP_IMPACT: run.stop = swing::SwingStop::kImpact; break;
+    case v1::SWING_STOP_DURATION: run.stop = swing::SwingStop::kDuration; break;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrFormat("stop: unknown value %d", static_cast<int>(r.stop())));
+  }
+  run.duration_s = r.has_duration_s() ? r.duration_s()
+                   : run.stop == swing::SwingStop::kDuration ? 0.5
+                                                              : 2.0;
+  if (r.sample_stride() > 1'000'000) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("sample_stride must be in [0, 1000000], got %d", r.sample_stride()));
+  }
+  if (r.sample_stride() > 0) {
+    run.sample_stride = static_cast<int>(r.sample_stride());
+  } else if (solver->integrator != SwingIntegrator::kDp45 && std::isfinite(run.duration_s)) {
+    // Automatic: at most about kAutoSamples samples from a fixed-step run.
+    constexpr double kAutoSamples = 5000;
+    const double steps = run.duration_s / solver->dt_s.value_or(swing::SwingSolverOptions::kDefaultDt);
+    run.sample_stride = std::max(1, static_cast<int>(std::ceil(steps / kAutoSamples)));
+  }
+  if (absl::Status s = swing::ValidateRunOptions(*solver, run); !s.ok()) return s;
+  return SwingJob{*std::move(model), *std::move(program), *solver, run};
+}
+
+void SampleToProto(const swing::SwingSample& s, v1::SwingSample* out) {
+  out->set_t_s(s.t_s);
+  out->set_theta_deg(RadToDeg(s.theta));
+  out->set_alpha_deg(RadToDeg(s.alpha));
+  out->set_beta_deg(RadToDeg(s.beta));
+  out->set_phi_deg(RadToDeg(s.phi));
+  out->set_clubhead_speed_mps(s.clubhead_speed_mps);
+  out->set_alpha_dot_rps(s.alpha_dot);
+  out->set_beta_dot_rps(s.beta_dot);
+  out->set_clubhead_speed_ground_mps(s.clubhead_speed_ground_mps);
+  out->set_clubhead_x_m(s.clubhead_x_m);
+  out->set_clubhead_y_m(s.clubhead_y_m);
+  out->set_clubhead_vx_mps(s.clubhead_vx_mps);
+  out->set_clubhead_vy_mps(s.clubhead_vy_mps);
+}
+
+void ImpactToProto(const swing::SwingSample& s, v1::SwingImpact* out) {
+  out->set_t_s(s.t_s);
+  out->set_alpha_deg(RadToDeg(s.alpha));
+  out->set_beta_deg(RadToDeg(s.beta));
+  out->set_theta_deg(RadToDeg(s.theta));
+  out->set_phi_deg(RadToDeg(s.phi));
+  out->set_alpha_dot_rps(s.alpha_dot);
+  out->set_beta_dot_rps(s.beta_dot);
+  out->set_clubhead_speed_mps(s.clubhead_speed_mps);
+  out->set_clubhead_speed_ground_mps(s.clubhead_speed_ground_mps);
+  out->set_clubhead_vx_ground_mps(s.clubhead_vx_ground_mps);
+  out->set_clubhead_vy_ground_mps(s.clubhead_vy_ground_mps);
+  // Angle above the horizontal of the velocity, measured toward the target (-x).
+  out->set_clubhead_direction_deg(
+      RadToDeg(std::atan2(s.clubhead_vy_ground_mps, -s.clubhead_vx_ground_mps)));
+}
+
+void SwingResultToProto(const swing::SwingRunResult& r, double cpu_s,
+                        v1::SimulateSwingResponse* out) {
+  if (r.impact) ImpactToProto(*r.impact, out->mutable_impact());
+  out->mutable_samples()->Reserve(static_cast<int>(r.samples.size()));
+  for (const swing::SwingSample& s : r.samples) SampleToProto(s, out->add_samples());
+  out->set_steps(static_cast<uint32_t>(r.steps));
+  out->set_cpu_s(cpu_s);
+  out->set_rejected_steps(static_cast<uint32_t>(r.rejected_steps));
+  out->set_rhs_evaluations(static_cast<uint32_t>(r.rhs_evaluations));
+  out->set_end_t_s(r.end_t_s);
+}
+
+std::vector<v1::ParameterInfo> SwingParameterInfo() {
+  const swing::SwingParams d;
+  struct Row {
+    const char* name;
+    const char* unit;
+    double def, lo, hi;
+    const char* description;
+  };
+  const Row rows[] = {
+      {"arm_inertia_kgm2", "kg m^2", d.arm_inertia_kgm2, 0, 100, "J: arm about the shoulder (> 0)"},
+      {"arm_length_m", "m", d.arm_length_m, 0, 5, "R: shoulder to wrists (> 0)"},
+      {"arm_first_moment_kgm", "kg m", d.arm_first_moment_kgm, 0, 100, "S_A: arm first moment about the shoulder"},
+      {"club_inertia_kgm2", "kg m^2", d.club_inertia_kgm2, 0, 100, "I: club about the wrists (> 0)"},
+      {"club_mass_kg", "kg", d.club_mass_kg, 0, 100, "Mc: club mass (> 0)"},
+      {"club_length_m", "m", d.club_length_m, 0, 5, "L: wrists to clubhead (> 0)"},
+      {"club_first_moment_kgm", "kg m", d.club_first_moment_kgm, 0, 100, "S: club first moment about the wrists"},
+      {"gravity_mps2", "m/s^2", d.gravity_mps2, 0, 100, "g"},
+      {"gamma_deg", "deg", RadToDeg(d.gamma_rad), -360, 360, "arm angle at the top of the backswing"},
+      {"beta0_deg", "deg", RadToDeg(d.beta0_rad), -360, 360, "initial wrist cock"},
+      {"shoulder_accel_mps2", "m/s^2", d.shoulder_accel_mps2, 0, 100, "A: shoulder acceleration toward the target"},
+  };
+  std::vector<v1::ParameterInfo> out;
+  for (const Row& r : rows) {
+    v1::ParameterInfo& p = out.emplace_back();
+    p.set_name(r.name);
+    p.set_unit(r.unit);
+    p.set_default_value(r.def);
+    p.set_min_value(r.lo);
+    p.set_max_value(r.hi);
+    p.set_description(r.description);
+  }
+  return out;
+}
+
+std::vector<std::string> SwingEffectNames() { return {"gravity", "shoulder_accel", "wrist_torque"}; }
+
+}  // namespace sportsim::server

@@ -1,0 +1,48 @@
+// sportsim.v1 swing messages <-> sim/swing types. Pure translation, tested without a network.
+#ifndef SPORTSIM_SERVER_SWING_CONVERT_H_
+#define SPORTSIM_SERVER_SWING_CONVERT_H_
+
+#include <string>
+#include <vector>
+
+#include "absl/status/statusor.h"
+#include "sim/swing/swing_model.h"
+#include "sim/swing/swing_simulation.h"
+#include "sim/swing/swing_stepper.h"
+#include "sim/swing/torque_program.h"
+#include "sportsim/v1/common.pb.h"
+#include "sportsim/v1/swing.pb.h"
+
+namespace sportsim::server {
+
+/// Everything a SimulateSwingRequest asks for, validated.
+struct SwingJob {
+  swing::SwingModel model;
+  swing::TorqueProgram program;
+  swing::SwingSolverOptions solver;
+  swing::SwingRunOptions run;
+};
+
+/// Parameters (chapter defaults for unset fields) -> validated model. Field names in errors are
+/// the proto's (e.g. "parameters.gamma_deg").
+absl::StatusOr<swing::SwingModel> SwingModelFromProto(const v1::SwingParameters& params,
+                                                      const google::protobuf::RepeatedField<int>&
+                                                          disabled_effects);
+absl::StatusOr<swing::TorqueProgram> TorqueProgramFromProto(const v1::TorqueProgram& program,
+                                                            bool has_program);
+absl::StatusOr<swing::SwingSolverOptions> SwingSolverFromProto(const v1::SwingSolver& solver);
+absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& request);
+
+void SampleToProto(const swing::SwingSample& s, v1::SwingSample* out);
+void ImpactToProto(const swing::SwingSample& s, v1::SwingImpact* out);
+void SwingResultToProto(const swing::SwingRunResult& result, double cpu_s,
+                        v1::SimulateSwingResponse* out);
+
+/// The swing parameters with units, defaults and ranges, for GetInfo.
+std::vector<v1::ParameterInfo> SwingParameterInfo();
+/// Names of the swing effects, as `--disable` takes them.
+std::vector<std::string> SwingEffectNames();
+
+}  // namespace sportsim::server
+
+#endif  // SPORTSIM_SERVER_SWING_CONVERT_H_
