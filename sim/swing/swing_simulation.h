@@ -3,7 +3,7 @@
 //
 // Impact is the first downward crossing of phi = theta + beta through a multiple of 2 pi (the
 // shaft pointing straight down), located to better than 1e-12 s on the interpolant of the step
-// in which it happens (cubic Hermite for fixed steps, the continuous extension for dp45).
+// in which it happens (cubic Hermite for first-order schemes, quintic for rk4, the continuous extension for dp45).
 #ifndef SPORTSIM_SIM_SWING_SWING_SIMULATION_H_
 #define SPORTSIM_SIM_SWING_SWING_SIMULATION_H_
 

@@ -15,7 +15,7 @@
 // Fixed-step schemes step on the grid t_k = k dt (k an integer, never an accumulated sum). A
 // torque breakpoint or stop time inside a grid step splits it, so every scheme honours switch
 // times exactly; dp45 clamps its step to land on them. Each step reports a StepRecord from which
-// the state anywhere inside the step can be interpolated (cubic Hermite for fixed steps, the
+// the state anywhere inside the step can be interpolated (cubic Hermite for first-order schemes, quintic for rk4, the
 // continuous extension for dp45) to locate impact.
 #ifndef SPORTSIM_SIM_SWING_SWING_STEPPER_H_
 #define SPORTSIM_SIM_SWING_SWING_STEPPER_H_
