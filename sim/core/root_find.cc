@@ -9,10 +9,14 @@ double FindBracketedRoot(absl::FunctionRef<double(double)> f, double a, double b
   if (fa == 0.0) return a;
   if (fb == 0.0) return b;
   int side = 0;  // which end was kept last time (Illinois halving)
-  for (int i = 0; i < 200 && std::abs(b - a) > t_tol; ++i) {
+  double width_checkpoint = std::abs(b - a);
+  for (int i = 0; i < 400 && std::abs(b - a) > t_tol; ++i) {
     double t = (a * fb - b * fa) / (fb - fa);
-    // Fall back to bisection when the secant lands outside or on the bracket.
-    if (!(t > std::fmin(a, b) && t < std::fmax(a, b))) t = 0.5 * (a + b);
+    // Bisect when the secant lands outside or on the bracket, and every third step unless the
+    // last three halved the bracket: this bounds the cost on flat (multiple) roots.
+    const bool stalled = i % 3 == 2 && std::abs(b - a) > 0.5 * width_checkpoint;
+    if (i % 3 == 2) width_checkpoint = std::abs(b - a);
+    if (stalled || !(t > std::fmin(a, b) && t < std::fmax(a, b))) t = 0.5 * (a + b);
     const double ft = f(t);
     if (ft == 0.0) return t;
     if ((ft > 0) == (fb > 0)) {

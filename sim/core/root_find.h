@@ -7,9 +7,10 @@
 namespace sportsim {
 
 /// Finds t in [a, b] with f(t) = 0, given f(a) and f(b) of opposite signs (or one of them zero).
-/// Illinois-modified regula falsi with a bisection fallback: superlinear on smooth functions and
+/// Illinois-modified regula falsi, with a bisection step whenever three steps have not halved the
+/// bracket: superlinear on simple roots, at worst about 3x bisection's cost on flat ones, and
 /// never leaves the bracket. Stops when the bracket is narrower than `t_tol` (same unit as t) or
-/// after 200 iterations, returning the end of the final bracket closest to the sign change.
+/// after 400 iterations, returning the midpoint of the final bracket.
 double FindBracketedRoot(absl::FunctionRef<double(double)> f, double a, double b, double fa,
                          double fb, double t_tol);
 

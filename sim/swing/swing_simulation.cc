@@ -49,7 +49,7 @@ std::optional<std::pair<double, SwingVec>> FindImpactInStep(SwingStepper& steppe
   return std::make_pair(t, stepper.Interpolate(r, t));
 }
 
-absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRunOptions& run) {
+absl::Status ValidateRunOptions(const SwingRunOptions& run) {
   if (!(std::isfinite(run.duration_s) && run.duration_s > 0 && run.duration_s <= 10)) {
     return absl::InvalidArgumentError(
         absl::StrFormat("duration_s must be finite and in (0, 10] s, got %g", run.duration_s));
@@ -58,22 +58,13 @@ absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRun
     return absl::InvalidArgumentError(
         absl::StrFormat("sample_stride must be at least 1, got %d", run.sample_stride));
   }
-  if (solver.integrator != SwingIntegrator::kDp45) {
-    const double dt = solver.dt_s.value_or(SwingSolverOptions::kDefaultDt);
-    if (run.duration_s / dt > static_cast<double>(SwingRunOptions::kMaxSteps)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "dt_s = %g s with duration_s = %g s needs more than %d steps; raise dt_s or shorten "
-          "duration_s",
-          dt, run.duration_s, SwingRunOptions::kMaxSteps));
-    }
-  }
   return absl::OkStatus();
 }
 
 absl::StatusOr<SwingRunResult> SimulateSwing(const SwingModel& model, const TorqueProgram& program,
                                              const SwingSolverOptions& solver,
                                              const SwingRunOptions& run) {
-  if (absl::Status s = ValidateRunOptions(solver, run); !s.ok()) return s;
+  if (absl::Status s = ValidateRunOptions(run); !s.ok()) return s;
   absl::StatusOr<SwingStepper> stepper_or = SwingStepper::Create(&model, &program, solver);
   if (!stepper_or.ok()) return stepper_or.status();
   SwingStepper& stepper = *stepper_or;

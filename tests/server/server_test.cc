@@ -1,0 +1,151 @@
+// The real server in-process on an ephemeral loopback port, called through generated stubs.
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+#include <grpcpp/grpcpp.h>
+
+#include "gmock/gmock.h"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "gtest/gtest.h"
+#include "server/server_app.h"
+#include "server/swing_convert.h"
+#include "sportsim/v1/common.grpc.pb.h"
+#include "sportsim/v1/swing.grpc.pb.h"
+
+namespace sportsim::server {
+namespace {
+
+using ::testing::Contains;
+using ::testing::HasSubstr;
+
+class ServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    absl::StatusOr<std::unique_ptr<ServerApp>> app = ServerApp::Start({.listen = "127.0.0.1:0"});
+    ASSERT_TRUE(app.ok()) << app.status();
+    app_ = *std::move(app);
+    channel_ = grpc::CreateChannel(app_->address(), grpc::InsecureChannelCredentials());
+  }
+  std::unique_ptr<grpc::ClientContext> Ctx() {
+    auto c = std::make_unique<grpc::ClientContext>();
+    c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    return c;
+  }
+  std::unique_ptr<ServerApp> app_;
+  std::shared_ptr<grpc::Channel> channel_;
+};
+
+TEST_F(ServerTest, GetInfoReportsBuildAndCapabilities) {
+  auto stub = v1::Server::NewStub(channel_);
+  v1::GetInfoResponse info;
+  ASSERT_TRUE(stub->GetInfo(Ctx().get(), {}, &info).ok());
+  EXPECT_EQ(info.version(), "0.1.0");
+  EXPECT_FALSE(info.build_type().empty());
+  EXPECT_FALSE(info.compiler().empty());
+  EXPECT_EQ(info.grpc_version(), "1.51.1");
+  const v1::Capabilities& c = info.capabilities();
+  EXPECT_THAT(c.swing_integrators(), ::testing::ElementsAre("book", "euler", "semi_implicit_euler", "rk4", "dp45"));
+  EXPECT_THAT(c.services(), Contains("sportsim.v1.Swing"));
+  EXPECT_EQ(c.swing_parameters_size(), 11);
+  EXPECT_EQ(c.engines_size(), 0);  // billiards not served yet: honest empty lists
+}
+
+TEST_F(ServerTest, HealthIsServing) {
+  auto stub = grpc::health::v1::Health::NewStub(channel_);
+  grpc::health::v1::HealthCheckResponse r;
+  ASSERT_TRUE(stub->Check(Ctx().get(), {}, &r).ok());
+  EXPECT_EQ(r.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+TEST_F(ServerTest, SimulateSwingIsBitIdenticalToTheLibrary) {
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateSwingRequest req;
+  req.mutable_solver()->set_integrator(v1::SWING_INTEGRATOR_RK4);
+  req.mutable_solver()->set_dt_s(0.0025);
+  v1::SimulateSwingResponse resp;
+  ASSERT_TRUE(stub->SimulateSwing(Ctx().get(), req, &resp).ok());
+  ASSERT_TRUE(resp.has_impact());
+
+  absl::StatusOr<SwingJob> job = SwingJobFromProto(req);
+  ASSERT_TRUE(job.ok());
+  absl::StatusOr<swing::SwingRunResult> direct =
+      swing::SimulateSwing(job->model, job->program, job->solver, job->run);
+  ASSERT_TRUE(direct.ok());
+  v1::SimulateSwingResponse expected;
+  SwingResultToProto(*direct, resp.cpu_s(), &expected);
+  EXPECT_EQ(resp.SerializeAsString(), expected.SerializeAsString());
+  EXPECT_NEAR(resp.impact().t_s(), 0.291391708, 1e-7);
+  EXPECT_GT(resp.cpu_s(), 0.0);
+}
+
+TEST_F(ServerTest, InvalidSwingIsInvalidArgumentNamingTheField) {
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateSwingRequest req;
+  req.mutable_parameters()->set_arm_length_m(std::nan(""));
+  v1::SimulateSwingResponse resp;
+  const grpc::Status s = stub->SimulateSwing(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("parameters.arm_length_m"));
+
+  req.Clear();
+  req.mutable_solver()->set_dt_s(0.05);  // under-resolved: a clear error, not numbers
+  const grpc::Status s2 = stub->SimulateSwing(Ctx().get(), req, &resp);
+  EXPECT_EQ(s2.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s2.error_message(), HasSubstr("dt_s = 0.05 s is too large"));
+}
+
+TEST_F(ServerTest, OversizedRequestIsResourceExhausted) {
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateSwingRequest req;
+  auto* qa = req.mutable_torques()->mutable_qalpha();
+  for (int i = 0; i < 100000; ++i) {  // ~2 MB, over the 1 MiB request limit
+    auto* k = qa->add_knots();
+    k->set_t_s(i);
+    k->set_torque_nm(1);
+  }
+  v1::SimulateSwingResponse resp;
+  const grpc::Status s = stub->SimulateSwing(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+}
+
+TEST_F(ServerTest, SecondServerOnABusyPortFailsClearly) {
+  absl::StatusOr<std::unique_ptr<ServerApp>> second =
+      ServerApp::Start({.listen = app_->address()});
+  ASSERT_FALSE(second.ok());
+  EXPECT_EQ(second.status().code(), absl::StatusCode::kUnavailable);
+  EXPECT_THAT(second.status().message(), HasSubstr("cannot listen on"));
+  EXPECT_THAT(second.status().message(), HasSubstr("in use"));
+}
+
+TEST_F(ServerTest, ShutdownLetsAnInFlightCallFinish) {
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateSwingRequest req;  // ~5e6 RK4 steps: long enough to be in flight at shutdown
+  req.mutable_solver()->set_dt_s(2e-6);
+  req.set_stop(v1::SWING_STOP_DURATION);
+  req.set_duration_s(10);
+  grpc::Status status;
+  v1::SimulateSwingResponse resp;
+  std::thread call([&] { status = stub->SimulateSwing(Ctx().get(), req, &resp); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  app_->Shutdown(absl::Seconds(20));
+  app_->Wait();
+  call.join();
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(resp.end_t_s(), 10.0);
+}
+
+TEST(ListenAddressTest, ParsesAndRejects) {
+  EXPECT_EQ(ParseListenAddress("127.0.0.1:50051")->port, 50051);
+  EXPECT_EQ(ParseListenAddress("[::1]:0")->host, "::1");
+  EXPECT_EQ(ParseListenAddress("localhost:80")->host, "localhost");
+  for (const char* bad : {"localhost", "127.0.0.1:", "127.0.0.1:99999", ":80", "::1:80",
+                          "[::1]80", "127.0.0.1:8o", "127.0.0.1:-1"}) {
+    absl::StatusOr<ListenAddress> a = ParseListenAddress(bad);
+    EXPECT_FALSE(a.ok()) << bad;
+    EXPECT_THAT(a.status().message(), HasSubstr("--listen must be host:port")) << bad;
+  }
+}
+
+}  // namespace
+}  // namespace sportsim::server
