@@ -161,7 +161,7 @@ absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& r) {
     const double steps = run.duration_s / solver->dt_s.value_or(swing::SwingSolverOptions::kDefaultDt);
     run.sample_stride = std::max(1, static_cast<int>(std::ceil(steps / kAutoSamples)));
   }
-  if (absl::Status s = swing::ValidateRunOptions(*solver, run); !s.ok()) return s;
+  if (absl::Status s = swing::ValidateRunOptions(run); !s.ok()) return s;
   return SwingJob{*std::move(model), *std::move(program), *solver, run};
 }
 

@@ -85,9 +85,9 @@ INSTANTIATE_TEST_SUITE_P(
     SevenSwings, SwingIndependentReferenceTest,
     ::testing::Combine(::testing::ValuesIn(Variants()),
                        ::testing::Values(SwingIntegrator::kRk4, SwingIntegrator::kDp45)),
-    [](const auto& info) {
-      return std::get<0>(info.param).name + "_" +
-             std::string(SwingIntegratorName(std::get<1>(info.param)));
+    [](const auto& param_info) {
+      return std::get<0>(param_info.param).name + "_" +
+             std::string(SwingIntegratorName(std::get<1>(param_info.param)));
     });
 
 }  // namespace
