@@ -5,25 +5,18 @@
 // error of the impact clubhead speed, the largest angle error (alpha or beta) at any step up to
 // impact, and the CPU time per swing (median of repeated runs, thread CPU clock). Prints CSV on
 // stdout; bench/swing_accuracy.py turns it into docs/swing-accuracy.md and its plot.
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
+#include "sim/core/cpu_clock.h"
 #include "sim/swing/swing_simulation.h"
 #include "sim/swing/swing_stepper.h"
 
 namespace sportsim::swing {
 namespace {
-
-double CpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // The reference trajectory as dp45 steps, evaluated anywhere through the continuous extension.
 class Reference {
@@ -88,12 +81,12 @@ void Study() {
       std::vector<double> times;
       const int reps_per_sample = std::max(1, static_cast<int>(20000 / std::max(1, r->steps)));
       for (int k = 0; k < 15; ++k) {
-        const double t0 = CpuSeconds();
+        const double t0 = ThreadCpuSeconds();
         for (int j = 0; j < reps_per_sample; ++j) {
           absl::StatusOr<SwingRunResult> again = SimulateSwing(m, p, o, {});
           if (!again.ok()) std::abort();
         }
-        times.push_back((CpuSeconds() - t0) / reps_per_sample);
+        times.push_back((ThreadCpuSeconds() - t0) / reps_per_sample);
       }
       std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
       std::printf("%s,%g,%d,%d,%.15g,%.3e,%.3e,%.3e,%.3f,ok\n",

@@ -1,11 +1,10 @@
 #include "server/services.h"
 
-#include <ctime>
-
 #include <google/protobuf/stubs/common.h>
 #include <grpcpp/grpcpp.h>
 
 #include "server/status_util.h"
+#include "sim/core/cpu_clock.h"
 #include "server/swing_convert.h"
 #include "sim/swing/swing_simulation.h"
 #include "sportsim/v1/common.grpc.pb.h"
@@ -23,13 +22,6 @@
 
 namespace sportsim::server {
 namespace {
-
-// CPU time of the calling thread (s): what a request cost, whatever the machine's load.
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 class InfoService final : public v1::Server::CallbackService {
   grpc::ServerUnaryReactor* GetInfo(grpc::CallbackServerContext* ctx, const v1::GetInfoRequest*,

@@ -10,7 +10,6 @@ namespace sportsim::swing {
 namespace {
 
 using Eigen::Vector3d;
-using internal::CheckRange;
 
 // State: position (3), velocity (3), spin rate (rad/s).
 using State = Eigen::Matrix<double, 7, 1>;
@@ -270,26 +269,26 @@ double RegimeCrossing(const Model& model, const State& y0, const State& f0,
 }
 
 absl::Status ValidateAtmosphere(const Atmosphere& air) {
-  if (auto s = CheckRange("temperature_c", air.temperature_c, -60, false, 60,
+  if (auto s = CheckFiniteInRange("temperature_c", air.temperature_c, -60, false, 60,
                           false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("pressure_pa", air.pressure_pa, 80000, false, 110000,
+  if (auto s = CheckFiniteInRange("pressure_pa", air.pressure_pa, 80000, false, 110000,
                           false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("relative_humidity", air.relative_humidity, 0, false,
+  if (auto s = CheckFiniteInRange("relative_humidity", air.relative_humidity, 0, false,
                           1, false);
       !s.ok())
     return s;
-  return CheckRange("altitude_m", air.altitude_m, -500, false, 5000, false);
+  return CheckFiniteInRange("altitude_m", air.altitude_m, -500, false, 5000, false);
 }
 
 absl::Status ValidateWind(const Wind& wind) {
-  if (auto s = CheckRange("wind speed_mps", wind.speed_mps, 0, false, 50, false);
+  if (auto s = CheckFiniteInRange("wind speed_mps", wind.speed_mps, 0, false, 50, false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("wind toward_deg", wind.toward_deg, -360, false, 360,
+  if (auto s = CheckFiniteInRange("wind toward_deg", wind.toward_deg, -360, false, 360,
                           false);
       !s.ok())
     return s;
@@ -297,11 +296,11 @@ absl::Status ValidateWind(const Wind& wind) {
     case WindProfile::kUniform:
       return absl::OkStatus();
     case WindProfile::kLogarithmic:
-      if (auto s = CheckRange("wind reference_height_m",
+      if (auto s = CheckFiniteInRange("wind reference_height_m",
                               wind.reference_height_m, 0, true, 1000, false);
           !s.ok())
         return s;
-      return CheckRange("wind roughness_length_m", wind.roughness_length_m, 0,
+      return CheckFiniteInRange("wind roughness_length_m", wind.roughness_length_m, 0,
                         true, wind.reference_height_m, true);
   }
   return absl::InvalidArgumentError(absl::StrFormat(
@@ -310,33 +309,33 @@ absl::Status ValidateWind(const Wind& wind) {
 }
 
 absl::Status ValidateAero(const AeroCoefficients& a) {
-  if (auto s = CheckRange("aero cd_low", a.cd_low, 0, false, 10, false); !s.ok())
+  if (auto s = CheckFiniteInRange("aero cd_low", a.cd_low, 0, false, 10, false); !s.ok())
     return s;
-  if (auto s = CheckRange("aero cd_high", a.cd_high, 0, false, 10, false);
+  if (auto s = CheckFiniteInRange("aero cd_high", a.cd_high, 0, false, 10, false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("aero cd_spin", a.cd_spin, 0, false, 10, false);
+  if (auto s = CheckFiniteInRange("aero cd_spin", a.cd_spin, 0, false, 10, false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("aero re_low", a.re_low, 0, true, 1e7, true); !s.ok())
+  if (auto s = CheckFiniteInRange("aero re_low", a.re_low, 0, true, 1e7, true); !s.ok())
     return s;
-  if (auto s = CheckRange("aero re_high", a.re_high, a.re_low, true, 1e7, false);
+  if (auto s = CheckFiniteInRange("aero re_high", a.re_high, a.re_low, true, 1e7, false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("aero cl_amplitude", a.cl_amplitude, 0, false, 10,
+  if (auto s = CheckFiniteInRange("aero cl_amplitude", a.cl_amplitude, 0, false, 10,
                           false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("aero cl_exponent", a.cl_exponent, 0.1, false, 2,
+  if (auto s = CheckFiniteInRange("aero cl_exponent", a.cl_exponent, 0.1, false, 2,
                           false);
       !s.ok())
     return s;
-  return CheckRange("aero spin_decay_coefficient", a.spin_decay_coefficient, 0,
+  return CheckFiniteInRange("aero spin_decay_coefficient", a.spin_decay_coefficient, 0,
                     true, 1e-2, false);
 }
 
 absl::Status ValidateOptions(const FlightOptions& o) {
-  if (auto s = CheckRange("dt_s", o.dt_s, 0, true, 0.1, false); !s.ok()) return s;
+  if (auto s = CheckFiniteInRange("dt_s", o.dt_s, 0, true, 0.1, false); !s.ok()) return s;
   switch (o.integrator) {
     case FlightIntegrator::kRk4:
       if (o.tolerance != 0.0) {
@@ -348,11 +347,11 @@ absl::Status ValidateOptions(const FlightOptions& o) {
       }
       break;
     case FlightIntegrator::kDormandPrince45:
-      if (auto s = CheckRange("tolerance (required by kDormandPrince45)",
+      if (auto s = CheckFiniteInRange("tolerance (required by kDormandPrince45)",
                               o.tolerance, 0, true, 1e-2, false);
           !s.ok())
         return s;
-      if (auto s = CheckRange("max_step_s", o.max_step_s, o.dt_s, false, 1.0,
+      if (auto s = CheckFiniteInRange("max_step_s", o.max_step_s, o.dt_s, false, 1.0,
                               false);
           !s.ok())
         return s;
@@ -363,20 +362,20 @@ absl::Status ValidateOptions(const FlightOptions& o) {
                           static_cast<int>(o.integrator)));
   }
   if (o.sample_interval_s != 0.0) {
-    if (auto s = CheckRange("sample_interval_s (or 0 for none)",
+    if (auto s = CheckFiniteInRange("sample_interval_s (or 0 for none)",
                             o.sample_interval_s, 1e-4, false, 10, false);
         !s.ok())
       return s;
   }
-  if (auto s = CheckRange("max_flight_time_s", o.max_flight_time_s, 0, true,
+  if (auto s = CheckFiniteInRange("max_flight_time_s", o.max_flight_time_s, 0, true,
                           600, false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("launch_height_m", o.launch_height_m, 0, false, 1000,
+  if (auto s = CheckFiniteInRange("launch_height_m", o.launch_height_m, 0, false, 1000,
                           false);
       !s.ok())
     return s;
-  if (auto s = CheckRange("gravity_mps2", o.gravity_mps2, 0, true, 100, false);
+  if (auto s = CheckFiniteInRange("gravity_mps2", o.gravity_mps2, 0, true, 100, false);
       !s.ok())
     return s;
   if (o.spin_decay_model != SpinDecayModel::kLaunchSpeed &&

@@ -20,25 +20,25 @@ Vector3d DirectionFromAngles(double elevation_rad, double azimuth_rad) {
 }
 
 absl::Status ValidateDelivery(const ClubDelivery& d) {
-  if (auto s = internal::CheckRange("clubhead_speed_mps", d.clubhead_speed_mps,
+  if (auto s = CheckFiniteInRange("clubhead_speed_mps", d.clubhead_speed_mps,
                                     0, true, 100, false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("attack_angle_deg", d.attack_angle_deg, -45,
+  if (auto s = CheckFiniteInRange("attack_angle_deg", d.attack_angle_deg, -45,
                                     false, 45, false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("club_path_deg", d.club_path_deg, -45,
+  if (auto s = CheckFiniteInRange("club_path_deg", d.club_path_deg, -45,
                                     false, 45, false);
       !s.ok())
     return s;
   if (d.dynamic_loft_deg.has_value()) {
-    if (auto s = internal::CheckRange("dynamic_loft_deg", *d.dynamic_loft_deg,
+    if (auto s = CheckFiniteInRange("dynamic_loft_deg", *d.dynamic_loft_deg,
                                       -30, false, 90, true);
         !s.ok())
       return s;
   }
-  return internal::CheckRange("face_angle_deg", d.face_angle_deg, -45, false,
+  return CheckFiniteInRange("face_angle_deg", d.face_angle_deg, -45, false,
                               45, false);
 }
 

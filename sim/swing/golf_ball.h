@@ -50,6 +50,7 @@
 #include <string_view>
 
 #include "absl/status/status.h"
+#include "sim/core/check.h"
 #include "absl/status/statusor.h"
 #include "absl/strings/str_format.h"
 
@@ -121,67 +122,53 @@ inline LaunchConditions LaunchFromBackAndSideSpin(double ball_speed_mps,
   };
 }
 
-namespace internal {
-
-// "name must be finite and in (lo, hi], got v" unless v is in the range.
-inline absl::Status CheckRange(std::string_view name, double value, double lo,
-                               bool lo_open, double hi, bool hi_open) {
-  const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) &&
-                  (hi_open ? value < hi : value <= hi);
-  if (ok) return absl::OkStatus();
-  return absl::InvalidArgumentError(absl::StrFormat(
-      "%s must be finite and in %c%g, %g%c, got %g", name, lo_open ? '(' : '[',
-      lo, hi, hi_open ? ')' : ']', value));
-}
-
-}  // namespace internal
 
 /// Checks every BallSpec field; InvalidArgument names the first bad field.
 inline absl::Status ValidateBallSpec(const BallSpec& ball) {
-  if (auto s = internal::CheckRange("mass_kg", ball.mass_kg, 0, true, 1, false);
+  if (auto s = CheckFiniteInRange("mass_kg", ball.mass_kg, 0, true, 1, false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("diameter_m", ball.diameter_m, 0, true, 0.5,
+  if (auto s = CheckFiniteInRange("diameter_m", ball.diameter_m, 0, true, 0.5,
                                     false);
       !s.ok())
     return s;
-  return internal::CheckRange("inertia_factor", ball.inertia_factor, 0, true,
+  return CheckFiniteInRange("inertia_factor", ball.inertia_factor, 0, true,
                               2.0 / 3.0, false);
 }
 
 /// Checks every ClubSpec field; InvalidArgument names the first bad field.
 inline absl::Status ValidateClubSpec(const ClubSpec& club) {
-  if (auto s = internal::CheckRange("head_mass_kg", club.head_mass_kg, 0, true,
+  if (auto s = CheckFiniteInRange("head_mass_kg", club.head_mass_kg, 0, true,
                                     2, false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("loft_deg", club.loft_deg, 0, false, 90,
+  if (auto s = CheckFiniteInRange("loft_deg", club.loft_deg, 0, false, 90,
                                     true);
       !s.ok())
     return s;
-  return internal::CheckRange("cor", club.cor, 0, true, 1, false);
+  return CheckFiniteInRange("cor", club.cor, 0, true, 1, false);
 }
 
 /// Checks every LaunchConditions field.
 inline absl::Status ValidateLaunchConditions(const LaunchConditions& launch) {
-  if (auto s = internal::CheckRange("ball_speed_mps", launch.ball_speed_mps, 0,
+  if (auto s = CheckFiniteInRange("ball_speed_mps", launch.ball_speed_mps, 0,
                                     true, 120, false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("launch_angle_deg", launch.launch_angle_deg,
+  if (auto s = CheckFiniteInRange("launch_angle_deg", launch.launch_angle_deg,
                                     -90, false, 90, false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("launch_direction_deg",
+  if (auto s = CheckFiniteInRange("launch_direction_deg",
                                     launch.launch_direction_deg, -90, false, 90,
                                     false);
       !s.ok())
     return s;
-  if (auto s = internal::CheckRange("spin_rpm", launch.spin_rpm, 0, false,
+  if (auto s = CheckFiniteInRange("spin_rpm", launch.spin_rpm, 0, false,
                                     30000, false);
       !s.ok())
     return s;
-  return internal::CheckRange("spin_axis_deg", launch.spin_axis_deg, -180,
+  return CheckFiniteInRange("spin_axis_deg", launch.spin_axis_deg, -180,
                               false, 180, false);
 }
 

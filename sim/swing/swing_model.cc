@@ -5,18 +5,9 @@
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
+#include "sim/core/check.h"
 
 namespace sportsim::swing {
-namespace {
-
-absl::Status CheckRange(std::string_view name, double v, double lo, double hi, bool lo_open) {
-  const bool ok = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi;
-  if (ok) return absl::OkStatus();
-  return absl::InvalidArgumentError(absl::StrFormat("%s must be finite and in %c%g, %g], got %g",
-                                                    name, lo_open ? '(' : '[', lo, hi, v));
-}
-
-}  // namespace
 
 SwingModel::SwingModel(const SwingParams& params, uint32_t disabled)
     : params_(params), disabled_(disabled) {
@@ -45,7 +36,9 @@ absl::StatusOr<SwingModel> SwingModel::Create(const SwingParams& p, uint32_t dis
       {"shoulder_accel_mps2", p.shoulder_accel_mps2, 0, 100, false},
   };
   for (const Check& c : checks) {
-    if (absl::Status s = CheckRange(c.name, c.value, c.lo, c.hi, c.lo_open); !s.ok()) return s;
+    if (absl::Status s = CheckFiniteInRange(c.name, c.value, c.lo, c.lo_open, c.hi, false); !s.ok()) {
+      return s;
+    }
   }
   if ((disabled & ~static_cast<uint32_t>(kSwingAllEffects)) != 0) {
     return absl::InvalidArgumentError(
