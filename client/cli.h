@@ -45,6 +45,7 @@ std::string Num(double v);
 int RunInfo(const Context& ctx, const std::vector<std::string>& args);
 int RunHealth(const Context& ctx, const std::vector<std::string>& args);
 int RunSwing(const Context& ctx, const std::vector<std::string>& args);
+int RunFlight(const Context& ctx, const std::vector<std::string>& args);
 
 }  // namespace sportsim::cli
 

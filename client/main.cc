@@ -35,6 +35,11 @@ Commands:
       --max-step S  --duration S  --until impact|duration  --qalpha NM  --qbeta NM
       --qbeta-until S  --shoulder-accel MPS2  --gamma DEG  --beta0 DEG
       --disable gravity,shoulder_accel,wrist_torque  --stride N
+  flight simulate [flags]   fly a golf ball from launch conditions to landing:
+      --ball-speed MPS --launch-deg DEG --spin-rpm RPM  [--spin-axis-deg DEG]
+      [--launch-direction-deg DEG] [--wind MPS[,TOWARD_DEG[,log]]] [--temperature-c C]
+      [--pressure-pa PA] [--humidity F] [--altitude-m M] [--dt S] [--sample-interval S]
+      [--disable drag,lift,spin_decay,wind]
 Flags may be written --name value or --name=value; dashes and underscores are the same.
 Errors: the gRPC status code name and message on stderr, exit status = the code number
 (2 for usage errors). --helpfull lists every flag.)";
@@ -183,5 +188,6 @@ int main(int argc, char** argv) {
   if (command == "info") return RunInfo(ctx, rest);
   if (command == "health") return RunHealth(ctx, rest);
   if (command == "swing") return RunSwing(ctx, rest);
-  return UsageError("unknown command '" + command + "' (info, health, swing)");
+  if (command == "flight") return RunFlight(ctx, rest);
+  return UsageError("unknown command '" + command + "' (info, health, swing, flight)");
 }

@@ -54,6 +54,27 @@ class SwingService final : public v1::Swing::CallbackService {
     SwingResultToProto(*result, cpu_s, response);
     return absl::OkStatus();
   }
+
+  grpc::ServerUnaryReactor* SimulateFlight(grpc::CallbackServerContext* ctx,
+                                           const v1::SimulateFlightRequest* request,
+                                           v1::SimulateFlightResponse* response) override {
+    auto* reactor = ctx->DefaultReactor();
+    reactor->Finish(ToGrpcStatus(Fly(*request, response)));
+    return reactor;
+  }
+
+  static absl::Status Fly(const v1::SimulateFlightRequest& request,
+                          v1::SimulateFlightResponse* response) {
+    absl::StatusOr<FlightJob> job = FlightJobFromProto(request);
+    if (!job.ok()) return job.status();
+    const double cpu0 = ThreadCpuSeconds();
+    absl::StatusOr<swing::FlightResult> result =
+        swing::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+    const double cpu_s = ThreadCpuSeconds() - cpu0;
+    if (!result.ok()) return result.status();
+    FlightResultToProto(*result, cpu_s, response);
+    return absl::OkStatus();
+  }
 };
 
 }  // namespace

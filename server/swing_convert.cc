@@ -210,6 +210,91 @@ void SwingResultToProto(const swing::SwingRunResult& r, double cpu_s,
   out->set_end_t_s(r.end_t_s);
 }
 
+absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r) {
+  FlightJob job;
+  const v1::LaunchConditions& l = r.launch();
+  job.launch = {.ball_speed_mps = l.ball_speed_mps(),
+                .launch_angle_deg = l.launch_angle_deg(),
+                .launch_direction_deg = l.launch_direction_deg(),
+                .spin_rpm = l.spin_rpm(),
+                .spin_axis_deg = l.spin_axis_deg()};
+  if (absl::Status s = swing::ValidateLaunchConditions(job.launch); !s.ok()) {
+    return Prefixed("launch.", s);
+  }
+  const v1::Atmosphere& a = r.atmosphere();
+  if (a.has_temperature_c()) job.atmosphere.temperature_c = a.temperature_c();
+  if (a.has_sea_level_pressure_pa()) job.atmosphere.pressure_pa = a.sea_level_pressure_pa();
+  if (a.has_relative_humidity()) job.atmosphere.relative_humidity = a.relative_humidity();
+  if (a.has_altitude_m()) job.atmosphere.altitude_m = a.altitude_m();
+  if (absl::StatusOr<swing::AirProperties> air = swing::ComputeAirProperties(job.atmosphere);
+      !air.ok()) {
+    return Prefixed("atmosphere.", air.status());
+  }
+  job.wind.speed_mps = r.wind().speed_mps();
+  job.wind.toward_deg = r.wind().toward_deg();
+  job.wind.profile = r.wind().logarithmic_profile() ? swing::WindProfile::kLogarithmic
+                                                    : swing::WindProfile::kUniform;
+  for (int i = 0; i < r.disabled_effects_size(); ++i) {
+    switch (r.disabled_effects(i)) {
+      case v1::FLIGHT_EFFECT_DRAG: job.options.disabled |= swing::kFlightDisableDrag; break;
+      case v1::FLIGHT_EFFECT_LIFT: job.options.disabled |= swing::kFlightDisableLift; break;
+      case v1::FLIGHT_EFFECT_SPIN_DECAY:
+        job.options.disabled |= swing::kFlightDisableSpinDecay;
+        break;
+      case v1::FLIGHT_EFFECT_WIND: job.options.disabled |= swing::kFlightDisableWind; break;
+      default:
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "disabled_effects[%d]: unknown effect %d", i, static_cast<int>(r.disabled_effects(i))));
+    }
+  }
+  // Tighter than the library's own limits: a request must stay cheap and its answer small
+  // (a flight lasts at most 60 s: at most 6e6 steps and 6e4 samples).
+  if (r.has_dt_s()) {
+    if (!(std::isfinite(r.dt_s()) && r.dt_s() >= 1e-5 && r.dt_s() <= 0.1)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("dt_s must be finite and in [1e-05, 0.1] s, got %g", r.dt_s()));
+    }
+    job.options.dt_s = r.dt_s();
+  }
+  if (r.has_sample_interval_s()) {
+    if (!(std::isfinite(r.sample_interval_s()) && r.sample_interval_s() >= 1e-3 &&
+          r.sample_interval_s() <= 10)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "sample_interval_s must be finite and in [0.001, 10] s, got %g", r.sample_interval_s()));
+    }
+    job.options.sample_interval_s = r.sample_interval_s();
+  }
+  return job;
+}
+
+void FlightResultToProto(const swing::FlightResult& f, double cpu_s,
+                         v1::SimulateFlightResponse* out) {
+  out->set_carry_m(f.carry_m);
+  out->set_apex_m(f.apex_m);
+  out->set_flight_time_s(f.flight_time_s);
+  out->set_landing_angle_deg(f.landing_angle_deg);
+  out->set_lateral_m(f.lateral_m);
+  out->mutable_samples()->Reserve(static_cast<int>(f.samples.size()));
+  for (const swing::FlightSample& s : f.samples) {
+    v1::FlightSample* o = out->add_samples();
+    o->set_t_s(s.t_s);
+    o->set_x_m(s.x_m);
+    o->set_y_m(s.y_m);
+    o->set_z_m(s.z_m);
+    o->set_vx_mps(s.vx_mps);
+    o->set_vy_mps(s.vy_mps);
+    o->set_vz_mps(s.vz_mps);
+    o->set_speed_mps(s.speed_mps);
+    o->set_spin_rpm(s.spin_rpm);
+  }
+  out->set_landing_speed_mps(f.landing_speed_mps);
+  out->set_carry_downrange_m(f.carry_downrange_m);
+  out->set_apex_time_s(f.apex_time_s);
+  out->set_air_density_kgpm3(f.air.density_kgpm3);
+  out->set_steps(static_cast<uint32_t>(f.steps));
+  out->set_cpu_s(cpu_s);
+}
+
 std::vector<v1::ParameterInfo> SwingParameterInfo() {
   const swing::SwingParams d;
   struct Row {

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "sim/swing/ball_flight.h"
+#include "sim/swing/golf_ball.h"
 #include "sim/swing/swing_model.h"
 #include "sim/swing/swing_simulation.h"
 #include "sim/swing/swing_stepper.h"
@@ -37,6 +39,19 @@ void SampleToProto(const swing::SwingSample& s, v1::SwingSample* out);
 void ImpactToProto(const swing::SwingSample& s, v1::SwingImpact* out);
 void SwingResultToProto(const swing::SwingRunResult& result, double cpu_s,
                         v1::SimulateSwingResponse* out);
+
+/// Everything a SimulateFlightRequest asks for, validated (field names in errors are the
+/// proto's: "launch.spin_rpm", "atmosphere.altitude_m", "dt_s").
+struct FlightJob {
+  swing::BallSpec ball;
+  swing::LaunchConditions launch;
+  swing::Atmosphere atmosphere;
+  swing::Wind wind;
+  swing::FlightOptions options;
+};
+absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& request);
+void FlightResultToProto(const swing::FlightResult& result, double cpu_s,
+                         v1::SimulateFlightResponse* out);
 
 /// The swing parameters with units, defaults and ranges, for GetInfo.
 std::vector<v1::ParameterInfo> SwingParameterInfo();

@@ -81,6 +81,26 @@ class CliAgainstServer(unittest.TestCase):
         self.assertEqual(len(rows), 1 + 201)  # the chapter's 200 steps plus the start
         self.assertAlmostEqual(float(rows[-1][0]), 0.5, places=12)
 
+    def test_flight_simulate_json_contract(self):
+        r = cli(self.server.address, "flight", "simulate", "--ball-speed", "74.66", "--launch-deg",
+                "10.9", "--spin-rpm", "2686", "--spin-axis-deg", "-3", "--wind", "4,180",
+                "--format", "json")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        out = json.loads(r.stdout)
+        for key in ("carry_m", "apex_m", "flight_time_s", "landing_angle_deg", "lateral_m",
+                    "samples"):
+            self.assertIn(key, out)
+        self.assertLess(out["lateral_m"], 0)  # negative tilt draws left
+        self.assertGreater(out["carry_m"], 150)
+        self.assertEqual(out["samples"][0]["t_s"], 0)
+        r = cli(self.server.address, "--format", "csv", "flight", "simulate", "--ball-speed",
+                "50", "--launch-deg", "20", "--spin-rpm", "5000")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertTrue(r.stdout.startswith("t_s,x_m,y_m,z_m,"))
+        r = cli(self.server.address, "flight", "simulate", "--ball-speed", "50")
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("needs --ball-speed, --launch-deg and --spin-rpm", r.stderr)
+
     def test_dashed_flags_and_negative_values(self):
         r = cli(self.server.address, "swing", "simulate", "--qbeta", "-20", "--qbeta-until",
                 "0.05", "--shoulder-accel", "0", "--format", "json")

@@ -135,6 +135,33 @@ TEST_F(ServerTest, ShutdownLetsAnInFlightCallFinish) {
   EXPECT_EQ(resp.end_t_s(), 10.0);
 }
 
+TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateFlightRequest req;
+  req.mutable_launch()->set_ball_speed_mps(60);
+  req.mutable_launch()->set_launch_angle_deg(14);
+  req.mutable_launch()->set_spin_rpm(4000);
+  req.mutable_launch()->set_spin_axis_deg(5);
+  req.mutable_wind()->set_speed_mps(3);
+  v1::SimulateFlightResponse resp;
+  ASSERT_TRUE(stub->SimulateFlight(Ctx().get(), req, &resp).ok());
+  absl::StatusOr<FlightJob> job = FlightJobFromProto(req);
+  ASSERT_TRUE(job.ok());
+  absl::StatusOr<swing::FlightResult> direct =
+      swing::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+  ASSERT_TRUE(direct.ok());
+  v1::SimulateFlightResponse expected;
+  FlightResultToProto(*direct, resp.cpu_s(), &expected);
+  EXPECT_EQ(resp.SerializeAsString(), expected.SerializeAsString());
+  EXPECT_GT(resp.lateral_m(), 0.0);  // positive axis tilt curves right
+  EXPECT_GT(resp.samples_size(), 100);
+
+  req.mutable_launch()->set_spin_rpm(std::nan(""));
+  const grpc::Status bad = stub->SimulateFlight(Ctx().get(), req, &resp);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(bad.error_message(), HasSubstr("launch.spin_rpm"));
+}
+
 TEST(ListenAddressTest, ParsesAndRejects) {
   EXPECT_EQ(ParseListenAddress("127.0.0.1:50051")->port, 50051);
   EXPECT_EQ(ParseListenAddress("[::1]:0")->host, "::1");

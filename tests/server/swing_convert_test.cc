@@ -159,3 +159,70 @@ TEST(SwingConvertTest, ResultToProtoUsesDegreesAndKeepsRates) {
 
 }  // namespace
 }  // namespace sportsim::server
+
+namespace sportsim::server {
+namespace {
+
+v1::SimulateFlightRequest DriverFlight() {
+  v1::SimulateFlightRequest r;
+  r.mutable_launch()->set_ball_speed_mps(74.66);
+  r.mutable_launch()->set_launch_angle_deg(10.9);
+  r.mutable_launch()->set_spin_rpm(2686);
+  return r;
+}
+
+TEST(FlightConvertTest, DefaultsAreIsaSeaLevelStillAirRk4) {
+  absl::StatusOr<FlightJob> job = FlightJobFromProto(DriverFlight());
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->launch.ball_speed_mps, 74.66);
+  EXPECT_EQ(job->atmosphere.temperature_c, 15.0);
+  EXPECT_EQ(job->atmosphere.pressure_pa, 101325.0);
+  EXPECT_EQ(job->wind.speed_mps, 0.0);
+  EXPECT_EQ(job->options.disabled, 0u);
+  EXPECT_EQ(job->options.dt_s, 1e-3);
+}
+
+TEST(FlightConvertTest, CarriesWindEffectsAndAtmosphere) {
+  v1::SimulateFlightRequest r = DriverFlight();
+  r.mutable_wind()->set_speed_mps(5);
+  r.mutable_wind()->set_toward_deg(180);
+  r.mutable_wind()->set_logarithmic_profile(true);
+  r.mutable_atmosphere()->set_altitude_m(1600);
+  r.add_disabled_effects(v1::FLIGHT_EFFECT_SPIN_DECAY);
+  r.set_sample_interval_s(0.05);
+  absl::StatusOr<FlightJob> job = FlightJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->wind.toward_deg, 180.0);
+  EXPECT_EQ(job->wind.profile, swing::WindProfile::kLogarithmic);
+  EXPECT_EQ(job->atmosphere.altitude_m, 1600.0);
+  EXPECT_EQ(job->options.disabled, swing::kFlightDisableSpinDecay);
+  EXPECT_EQ(job->options.sample_interval_s, 0.05);
+}
+
+TEST(FlightConvertTest, RejectsBadInputNamingTheField) {
+  struct Case {
+    void (*edit)(v1::SimulateFlightRequest*);
+    const char* message;
+  };
+  const Case cases[] = {
+      {[](auto* r) { r->mutable_launch()->set_ball_speed_mps(std::nan("")); }, "launch.ball_speed_mps"},
+      {[](auto* r) { r->mutable_launch()->set_launch_angle_deg(95); }, "launch.launch_angle_deg"},
+      {[](auto* r) { r->mutable_launch()->set_spin_rpm(-1); }, "launch.spin_rpm"},
+      {[](auto* r) { r->mutable_atmosphere()->set_altitude_m(1e6); }, "atmosphere.altitude_m"},
+      {[](auto* r) { r->mutable_atmosphere()->set_relative_humidity(2); }, "atmosphere.relative_humidity"},
+      {[](auto* r) { r->set_dt_s(1e-9); }, "dt_s must be finite and in [1e-05, 0.1] s"},
+      {[](auto* r) { r->set_sample_interval_s(1e-5); }, "sample_interval_s must be finite and in [0.001, 10] s"},
+      {[](auto* r) { r->mutable_disabled_effects()->Add(77); }, "disabled_effects[0]: unknown effect 77"},
+  };
+  for (const Case& c : cases) {
+    v1::SimulateFlightRequest r = DriverFlight();
+    c.edit(&r);
+    absl::StatusOr<FlightJob> job = FlightJobFromProto(r);
+    ASSERT_FALSE(job.ok()) << c.message;
+    EXPECT_EQ(job.status().code(), absl::StatusCode::kInvalidArgument);
+    EXPECT_THAT(job.status().message(), HasSubstr(c.message));
+  }
+}
+
+}  // namespace
+}  // namespace sportsim::server
