@@ -27,8 +27,9 @@ struct Context {
   std::unique_ptr<grpc::ClientContext> NewCall() const;
 };
 
-/// Exit status for usage errors (bad flags or arguments).
-inline constexpr int kUsageExit = 2;
+/// Exit status for usage errors (bad flags or arguments): sysexits' EX_USAGE, distinct from
+/// every gRPC code number.
+inline constexpr int kUsageExit = 64;
 
 /// Prints "sportsim: CODE_NAME: message" to stderr; returns the exit status (the code number).
 int ReportRpcError(const grpc::Status& status);

@@ -42,7 +42,7 @@ Commands:
       [--disable drag,lift,spin_decay,wind]
 Flags may be written --name value or --name=value; dashes and underscores are the same.
 Errors: the gRPC status code name and message on stderr, exit status = the code number
-(2 for usage errors). --helpfull lists every flag.)";
+(64 for usage errors). --helpfull lists every flag.)";
 
 // absl flag names cannot contain '-': accept --qbeta-until for --qbeta_until.
 std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
@@ -184,7 +184,11 @@ int main(int argc, char** argv) {
   }
   const std::string command = positional[1];
   std::vector<std::string> rest(positional.begin() + 2, positional.end());
-  ctx.channel = grpc::CreateChannel(ctx.server, grpc::InsecureChannelCredentials());
+  // Sampled trajectories can be large: accept what the server may send (64 MiB).
+  grpc::ChannelArguments channel_args;
+  channel_args.SetMaxReceiveMessageSize(64 << 20);
+  ctx.channel = grpc::CreateCustomChannel(ctx.server, grpc::InsecureChannelCredentials(),
+                                          channel_args);
   if (command == "info") return RunInfo(ctx, rest);
   if (command == "health") return RunHealth(ctx, rest);
   if (command == "swing") return RunSwing(ctx, rest);

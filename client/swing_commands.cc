@@ -67,6 +67,7 @@ std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
   const auto qa = absl::GetFlag(FLAGS_qalpha);
   const auto qb = absl::GetFlag(FLAGS_qbeta);
   const auto qb_until = absl::GetFlag(FLAGS_qbeta_until);
+  if (qb_until && !(*qb_until > 0)) return "--qbeta-until must be a time after 0 s";
   if (qa || qb || qb_until) {
     v1::TorqueKnot* k = r->mutable_torques()->mutable_qalpha()->add_knots();
     k->set_t_s(0);

@@ -3,7 +3,7 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build_dir=${SPORTSIM_BUILD_DIR:-$root/build}
 export CCACHE_BASEDIR=$root
-export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
+export CCACHE_DIR=${CCACHE_DIR:-${HOME:-/tmp}/.cache/ccache}
 
 configure() {
   if [ ! -f "$build_dir/build.ninja" ]; then

@@ -38,14 +38,18 @@ class SwingService final : public v1::Swing::CallbackService {
                                           const v1::SimulateSwingRequest* request,
                                           v1::SimulateSwingResponse* response) override {
     auto* reactor = ctx->DefaultReactor();
-    reactor->Finish(ToGrpcStatus(Simulate(*request, response)));
+    reactor->Finish(ToGrpcStatus(Simulate(*request, response, ctx)));
     return reactor;
   }
 
+  // A deadline, a client that goes away or a server shutdown past its grace cancels the call;
+  // the run polls that and stops.
   static absl::Status Simulate(const v1::SimulateSwingRequest& request,
-                               v1::SimulateSwingResponse* response) {
+                               v1::SimulateSwingResponse* response,
+                               grpc::CallbackServerContext* ctx) {
     absl::StatusOr<SwingJob> job = SwingJobFromProto(request);
     if (!job.ok()) return job.status();
+    job->run.cancelled = [ctx] { return ctx->IsCancelled(); };
     const double cpu0 = ThreadCpuSeconds();
     absl::StatusOr<swing::SwingRunResult> result =
         swing::SimulateSwing(job->model, job->program, job->solver, job->run);

@@ -153,15 +153,23 @@ absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& r) {
     return absl::InvalidArgumentError(
         absl::StrFormat("sample_stride must be in [0, 1000000], got %d", r.sample_stride()));
   }
+  // Automatic sampling keeps about kAutoSamples samples: a stride for fixed steps, a time
+  // interval for dp45. Checked after the duration is known to be in range.
+  constexpr double kAutoSamples = 5000;
+  if (absl::Status s = swing::ValidateRunOptions(*solver, {.duration_s = run.duration_s,
+                                                            .sample_stride = 1000000});
+      !s.ok()) {
+    return s;
+  }
   if (r.sample_stride() > 0) {
     run.sample_stride = static_cast<int>(r.sample_stride());
-  } else if (solver->integrator != SwingIntegrator::kDp45 && std::isfinite(run.duration_s)) {
-    // Automatic: at most about kAutoSamples samples from a fixed-step run.
-    constexpr double kAutoSamples = 5000;
+  } else if (solver->integrator == SwingIntegrator::kDp45) {
+    run.sample_interval_s = run.duration_s / kAutoSamples;
+  } else {
     const double steps = run.duration_s / solver->dt_s.value_or(swing::SwingSolverOptions::kDefaultDt);
     run.sample_stride = std::max(1, static_cast<int>(std::ceil(steps / kAutoSamples)));
   }
-  if (absl::Status s = swing::ValidateRunOptions(run); !s.ok()) return s;
+  if (absl::Status s = swing::ValidateRunOptions(*solver, run); !s.ok()) return s;
   return SwingJob{*std::move(model), *std::move(program), *solver, run};
 }
 

@@ -49,14 +49,31 @@ std::optional<std::pair<double, SwingVec>> FindImpactInStep(SwingStepper& steppe
   return std::make_pair(t, stepper.Interpolate(r, t));
 }
 
-absl::Status ValidateRunOptions(const SwingRunOptions& run) {
-  if (!(std::isfinite(run.duration_s) && run.duration_s > 0 && run.duration_s <= 10)) {
+absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRunOptions& run) {
+  if (!(std::isfinite(run.duration_s) && run.duration_s >= 1e-6 && run.duration_s <= 10)) {
     return absl::InvalidArgumentError(
-        absl::StrFormat("duration_s must be finite and in (0, 10] s, got %g", run.duration_s));
+        absl::StrFormat("duration_s must be finite and in [1e-06, 10] s, got %g", run.duration_s));
   }
   if (run.sample_stride < 1) {
     return absl::InvalidArgumentError(
         absl::StrFormat("sample_stride must be at least 1, got %d", run.sample_stride));
+  }
+  if (!(std::isfinite(run.sample_interval_s) && run.sample_interval_s >= 0)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "sample_interval_s must be finite and >= 0 s, got %g", run.sample_interval_s));
+  }
+  // Fixed steps: refuse too many samples before running (dp45's count is unknown; the run
+  // itself stops at kMaxSamples).
+  const double samples =
+      solver.integrator == SwingIntegrator::kDp45
+          ? 0.0
+          : run.duration_s / solver.dt_s.value_or(SwingSolverOptions::kDefaultDt) /
+                run.sample_stride;
+  if (samples > SwingRunOptions::kMaxSamples) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "the run would keep about %.0f samples, more than %d: raise sample_stride (or "
+        "sample_interval_s for dp45)",
+        samples, SwingRunOptions::kMaxSamples));
   }
   return absl::OkStatus();
 }
@@ -64,7 +81,7 @@ absl::Status ValidateRunOptions(const SwingRunOptions& run) {
 absl::StatusOr<SwingRunResult> SimulateSwing(const SwingModel& model, const TorqueProgram& program,
                                              const SwingSolverOptions& solver,
                                              const SwingRunOptions& run) {
-  if (absl::Status s = ValidateRunOptions(run); !s.ok()) return s;
+  if (absl::Status s = ValidateRunOptions(solver, run); !s.ok()) return s;
   absl::StatusOr<SwingStepper> stepper_or = SwingStepper::Create(&model, &program, solver);
   if (!stepper_or.ok()) return stepper_or.status();
   SwingStepper& stepper = *stepper_or;
@@ -74,17 +91,39 @@ absl::StatusOr<SwingRunResult> SimulateSwing(const SwingModel& model, const Torq
   const double t_end = run.duration_s;
   StepRecord rec;
   bool last_sampled = true;
+  double last_sample_t = 0.0;
   while (stepper.t() < t_end) {
     if (absl::Status s = stepper.Step(t_end, &rec); !s.ok()) return s;
     last_sampled = false;
+    if (stepper.steps() % SwingRunOptions::kCancelPollSteps == 0) {
+      if (run.cancelled && run.cancelled()) {
+        return absl::CancelledError(
+            absl::StrFormat("swing cancelled at t = %.6g s after %d steps", stepper.t(),
+                            stepper.steps()));
+      }
+      if (solver.integrator == SwingIntegrator::kDp45 &&
+          stepper.steps() >= SwingRunOptions::kMaxAdaptiveSteps) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "the run took %d steps by t = %.6g s without finishing: loosen the tolerance, raise "
+            "max_step_s or shorten duration_s",
+            stepper.steps(), stepper.t()));
+      }
+    }
     if (!result.impact) {
       if (auto hit = FindImpactInStep(stepper, rec)) {
         result.impact = MakeSample(model, hit->first, hit->second);
         if (run.stop == SwingStop::kImpact) break;
       }
     }
-    if (stepper.steps() % run.sample_stride == 0) {
+    if (stepper.steps() % run.sample_stride == 0 &&
+        stepper.t() - last_sample_t >= run.sample_interval_s) {
+      if (result.samples.size() >= SwingRunOptions::kMaxSamples) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "the run kept %d samples by t = %.6g s: raise sample_stride or sample_interval_s",
+            SwingRunOptions::kMaxSamples, stepper.t()));
+      }
       result.samples.push_back(MakeSample(model, stepper.t(), stepper.y()));
+      last_sample_t = stepper.t();
       last_sampled = true;
     }
   }

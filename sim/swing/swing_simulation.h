@@ -7,6 +7,7 @@
 #ifndef SPORTSIM_SIM_SWING_SWING_SIMULATION_H_
 #define SPORTSIM_SIM_SWING_SWING_SIMULATION_H_
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -24,11 +25,21 @@ enum class SwingStop {
 
 struct SwingRunOptions {
   SwingStop stop = SwingStop::kImpact;
-  double duration_s = 2.0;  ///< end (kDuration) or cap (kImpact) of the run (s), (0, 10]
+  double duration_s = 2.0;  ///< end (kDuration) or cap (kImpact) of the run (s), [1e-6, 10]
   int sample_stride = 1;    ///< keep every n-th step's state, >= 1 (first and last always kept)
+  /// Keep a step's state only if at least this much simulated time (s) passed since the last
+  /// kept one; 0 = off. Bounds the samples of adaptive runs, whose step count is not known.
+  double sample_interval_s = 0.0;
+  /// Polled every kCancelPollSteps steps; returning true stops the run with kCancelled.
+  std::function<bool()> cancelled;
+
+  static constexpr int kCancelPollSteps = 1024;
+  static constexpr int kMaxSamples = 200'000;  ///< fixed steps: refused up front; dp45: stops
+  static constexpr int kMaxAdaptiveSteps = 2'000'000;  ///< dp45 runs stop with an error here
 };
 // With dt_s >= 1e-6 s and duration_s <= 10 s a fixed-step run is at most 1e7 steps (~2.5 s of
-// CPU for rk4 on the machines in docs/swing-accuracy.md): that is the worst request costs.
+// CPU for rk4 here); a dp45 run at most kMaxAdaptiveSteps accepted steps (~1 s). Samples are at
+// most kMaxSamples (~20 MB on the wire).
 
 /// The state at one instant, with derived quantities. SI units, angles in radians.
 struct SwingSample {
@@ -54,8 +65,8 @@ struct SwingRunResult {
 /// Derived quantities for state y at time t.
 SwingSample MakeSample(const SwingModel& model, double t_s, const SwingVec& y);
 
-/// Validates the run options.
-absl::Status ValidateRunOptions(const SwingRunOptions& run);
+/// Validates the run options against the solver (sample counts are bounded up front).
+absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRunOptions& run);
 
 /// Runs one swing. Deterministic: the same inputs give bit-identical results.
 absl::StatusOr<SwingRunResult> SimulateSwing(const SwingModel& model, const TorqueProgram& program,

@@ -84,10 +84,10 @@ absl::Status ValidateSolverOptions(const SwingSolverOptions& o) {
     return absl::InvalidArgumentError(
         absl::StrFormat("tolerance must be finite and in [1e-14, 0.1], got %g", *o.tolerance));
   }
-  if (o.max_step_s && !(std::isfinite(*o.max_step_s) && *o.max_step_s > 0 &&
+  if (o.max_step_s && !(std::isfinite(*o.max_step_s) && *o.max_step_s >= 1e-6 &&
                         *o.max_step_s <= 0.1)) {
     return absl::InvalidArgumentError(
-        absl::StrFormat("max_step_s must be finite and in (0, 0.1] s, got %g", *o.max_step_s));
+        absl::StrFormat("max_step_s must be finite and in [1e-06, 0.1] s, got %g", *o.max_step_s));
   }
   if (!(std::isfinite(o.max_turn_per_step_rad) && o.max_turn_per_step_rad > 0 &&
         o.max_turn_per_step_rad <= kPi)) {
@@ -295,7 +295,7 @@ absl::Status SwingStepper::Dp45Step(double t_limit, StepRecord* rec) {
       k1_ = k7;
       // A step shortened to land on a stop keeps the earlier, larger proposal.
       h_ = std::min(to_stop ? std::max(h_, h * fac) : h * fac, max_step_);
-      if (to_stop && t1 >= b) {
+      while (SegmentEnd() <= t_ + TorqueProgram::kMergeS) {
         ++segment_;
         fsal_valid_ = false;  // the torques jump: k7 belongs to the old segment
       }

@@ -40,13 +40,15 @@ absl::Status ValidateSchedule(std::string_view name, const TorqueSchedule& s) {
 // Value at t_lo and slope of one schedule on a segment starting at t_lo that contains no knot.
 void PieceOn(const TorqueSchedule& s, double t_lo, double* v0, double* slope) {
   const auto& k = s.knots;
-  // Index of the last knot at or before t_lo (knots are strictly increasing).
+  // Index of the last knot at or before t_lo (knots are strictly increasing); a knot within
+  // kMergeS after t_lo was merged into this breakpoint and counts as reached.
+  const double reach = t_lo + TorqueProgram::kMergeS;
   size_t i = 0;
-  while (i + 1 < k.size() && k[i + 1].t_s <= t_lo) ++i;
-  if (s.interpolation == Interpolation::kPiecewiseConstant || t_lo < k.front().t_s ||
+  while (i + 1 < k.size() && k[i + 1].t_s <= reach) ++i;
+  if (s.interpolation == Interpolation::kPiecewiseConstant || reach < k.front().t_s ||
       i + 1 >= k.size()) {
     // Before the first knot, after the last, or a constant piece.
-    *v0 = (t_lo < k.front().t_s) ? k.front().torque_nm : k[i].torque_nm;
+    *v0 = (reach < k.front().t_s) ? k.front().torque_nm : k[i].torque_nm;
     *slope = 0.0;
     return;
   }
@@ -88,11 +90,13 @@ void TorqueProgram::Build() {
   breakpoints_.clear();
   for (const TorqueSchedule* s : {&q_alpha_, &q_beta_}) {
     for (const TorqueKnot& k : s->knots) {
-      if (k.t_s > 0.0) breakpoints_.push_back(k.t_s);
+      if (k.t_s > kMergeS) breakpoints_.push_back(k.t_s);
     }
   }
   std::sort(breakpoints_.begin(), breakpoints_.end());
-  breakpoints_.erase(std::unique(breakpoints_.begin(), breakpoints_.end()), breakpoints_.end());
+  breakpoints_.erase(std::unique(breakpoints_.begin(), breakpoints_.end(),
+                                 [](double a, double b) { return b - a <= kMergeS; }),
+                     breakpoints_.end());
   // Segment j spans [b_{j-1}, b_j] with b_{-1} = 0 (or -inf) and b_n = +inf.
   segments_.clear();
   for (size_t j = 0; j <= breakpoints_.size(); ++j) {

@@ -40,6 +40,9 @@ class TorqueProgram {
  public:
   static constexpr int kMaxKnots = 64;
   static constexpr double kMaxTorqueNm = 1e5;  ///< a sanity bound; realism limits live elsewhere
+  /// Knot times closer than this (s) to each other (across the two schedules) or to t = 0 make
+  /// one breakpoint: no integrator should take a 1e-16 s step to honour a rounding difference.
+  static constexpr double kMergeS = 1e-12;
 
   /// Validates the schedules: 1..kMaxKnots knots each, finite times in [0, 1e3] s, strictly
   /// increasing, finite torques with |Q| <= kMaxTorqueNm.

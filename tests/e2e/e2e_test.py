@@ -98,7 +98,7 @@ class CliAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertTrue(r.stdout.startswith("t_s,x_m,y_m,z_m,"))
         r = cli(self.server.address, "flight", "simulate", "--ball-speed", "50")
-        self.assertEqual(r.returncode, 2)
+        self.assertEqual(r.returncode, 64)
         self.assertIn("needs --ball-speed, --launch-deg and --spin-rpm", r.stderr)
 
     def test_dashed_flags_and_negative_values(self):
@@ -115,7 +115,7 @@ class CliAgainstServer(unittest.TestCase):
 
     def test_usage_error(self):
         r = cli(self.server.address, "swing", "simulate", "--integrator", "leapfrog")
-        self.assertEqual(r.returncode, 2)
+        self.assertEqual(r.returncode, 64)
         self.assertIn("--integrator must be", r.stderr)
 
     def test_unreachable_server(self):

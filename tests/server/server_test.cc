@@ -162,6 +162,27 @@ TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
   EXPECT_THAT(bad.error_message(), HasSubstr("launch.spin_rpm"));
 }
 
+// Shutdown with a short grace cancels a long call, and the run notices (it polls IsCancelled):
+// the server stops within the grace plus one poll, not when the simulation would have ended.
+TEST_F(ServerTest, ShutdownGraceCancelsALongRun) {
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateSwingRequest req;  // 1e7 rk4 steps, ~2.5 s of CPU if left alone
+  req.mutable_solver()->set_dt_s(1e-6);
+  req.set_stop(v1::SWING_STOP_DURATION);
+  req.set_duration_s(10);
+  grpc::Status status;
+  v1::SimulateSwingResponse resp;
+  std::thread call([&] { status = stub->SimulateSwing(Ctx().get(), req, &resp); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const auto t0 = std::chrono::steady_clock::now();
+  app_->Shutdown(absl::Milliseconds(100));
+  app_->Wait();
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  call.join();
+  EXPECT_FALSE(status.ok());
+  EXPECT_LT(waited, 1.5);
+}
+
 TEST(ListenAddressTest, ParsesAndRejects) {
   EXPECT_EQ(ParseListenAddress("127.0.0.1:50051")->port, 50051);
   EXPECT_EQ(ParseListenAddress("[::1]:0")->host, "::1");

@@ -125,7 +125,7 @@ INSTANTIATE_TEST_SUITE_P(
                    },
                    "solver.integrator: unknown value 42"},
         BadRequest{"nan_duration", [](auto* r) { r->set_duration_s(kNan); },
-                   "duration_s must be finite and in (0, 10] s"}),
+                   "duration_s must be finite and in [1e-06, 10] s"}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(SwingConvertTest, ResultToProtoUsesDegreesAndKeepsRates) {

@@ -327,3 +327,87 @@ TEST(SwingSimulationTest, TooLargeAStepIsAClearError) {
 
 }  // namespace
 }  // namespace sportsim::swing
+
+namespace sportsim::swing {
+namespace {
+
+using testing::ChapterModel;
+using testing::Solver;
+
+// Bounds that keep one request cheap (found in review: an unbounded dp45 run reached 7.9 GB).
+TEST(SwingLimitsTest, AdaptiveRunsStopAtTheStepCap) {
+  const SwingModel m = ChapterModel();
+  SwingSolverOptions o{.integrator = SwingIntegrator::kDp45, .tolerance = 1e-8, .max_step_s = 1e-6};
+  absl::StatusOr<SwingRunResult> r = SimulateSwing(
+      m, TorqueProgram::Chapter(), o,
+      {.stop = SwingStop::kDuration, .duration_s = 10, .sample_interval_s = 0.01});
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(r.status().message(), HasSubstr("without finishing"));  // checked every 1024 steps
+}
+
+TEST(SwingLimitsTest, TooManySamplesAreRefusedBeforeRunning) {
+  const SwingModel m = ChapterModel();
+  absl::StatusOr<SwingRunResult> r =
+      SimulateSwing(m, TorqueProgram::Chapter(), Solver(SwingIntegrator::kRk4, 1e-6),
+                    {.stop = SwingStop::kDuration, .duration_s = 10, .sample_stride = 1});
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.status().message(), HasSubstr("more than 200000"));
+  // dp45's step count is unknown up front: the run stops when it has kept the maximum.
+  SwingSolverOptions fine{.integrator = SwingIntegrator::kDp45, .tolerance = 1e-8, .max_step_s = 1e-5};
+  absl::StatusOr<SwingRunResult> d = SimulateSwing(
+      m, TorqueProgram::Chapter(), fine, {.stop = SwingStop::kDuration, .duration_s = 10});
+  ASSERT_FALSE(d.ok());
+  EXPECT_THAT(d.status().message(), HasSubstr("kept 200000 samples"));
+}
+
+TEST(SwingLimitsTest, CancellationStopsTheRun) {
+  const SwingModel m = ChapterModel();
+  int polls = 0;
+  SwingRunOptions run{.stop = SwingStop::kDuration, .duration_s = 1, .sample_stride = 100};
+  run.cancelled = [&] { return ++polls >= 2; };
+  absl::StatusOr<SwingRunResult> r =
+      SimulateSwing(m, TorqueProgram::Chapter(), Solver(SwingIntegrator::kRk4, 1e-5), run);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kCancelled);
+  EXPECT_EQ(polls, 2);  // polled every 1024 steps, stopped at the second poll
+}
+
+TEST(SwingLimitsTest, TinyDurationIsRefusedNotUnderflowed) {
+  const SwingModel m = ChapterModel();
+  absl::StatusOr<SwingRunResult> r = SimulateSwing(
+      m, TorqueProgram::Chapter(), Solver(SwingIntegrator::kDp45, 1e-8), {.duration_s = 1e-15});
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.status().message(), HasSubstr("duration_s must be finite and in [1e-06, 10]"));
+}
+
+// Knots one rounding step apart across the two schedules make one breakpoint; dp45 no longer
+// fails with a step-size underflow on them, and the answer is the same as with equal knots.
+TEST(SwingLimitsTest, NearlyCoincidentKnotsMerge) {
+  const SwingModel m = ChapterModel();
+  const double t1 = std::nextafter(0.1, 1.0);
+  const TorqueSchedule qa{Interpolation::kPiecewiseConstant, {{0.0, 100.0}, {0.1, 120.0}}};
+  const TorqueProgram near =
+      *TorqueProgram::Create(qa, {Interpolation::kPiecewiseConstant, {{0.0, -10.0}, {t1, 0.0}}});
+  const TorqueProgram same =
+      *TorqueProgram::Create(qa, {Interpolation::kPiecewiseConstant, {{0.0, -10.0}, {0.1, 0.0}}});
+  EXPECT_EQ(near.breakpoints().size(), 1u);
+  EXPECT_EQ(near.At(1, 0.2).q_beta, 0.0);  // the merged qbeta switch still happens
+  for (SwingIntegrator i : {SwingIntegrator::kDp45, SwingIntegrator::kRk4}) {
+    const double setting = i == SwingIntegrator::kDp45 ? 1e-10 : 1e-4;
+    absl::StatusOr<SwingRunResult> a = SimulateSwing(m, near, Solver(i, setting), {});
+    absl::StatusOr<SwingRunResult> b = SimulateSwing(m, same, Solver(i, setting), {});
+    ASSERT_TRUE(a.ok()) << a.status();
+    ASSERT_TRUE(b.ok() && a->impact && b->impact);
+    EXPECT_EQ(a->impact->t_s, b->impact->t_s);
+  }
+  // A switch at 1e-300 s is a switch at 0.
+  const TorqueProgram at_zero = *TorqueProgram::Create(
+      {Interpolation::kPiecewiseConstant, {{0.0, 100.0}}},
+      {Interpolation::kPiecewiseConstant, {{0.0, -10.0}, {1e-300, 0.0}}});
+  EXPECT_TRUE(at_zero.breakpoints().empty());
+  EXPECT_EQ(at_zero.At(0, 0.0).q_beta, 0.0);
+}
+
+}  // namespace
+}  // namespace sportsim::swing
