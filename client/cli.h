@@ -2,6 +2,7 @@
 #ifndef SPORTSIM_CLIENT_CLI_H_
 #define SPORTSIM_CLIENT_CLI_H_
 
+#include <iostream>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -42,6 +43,19 @@ std::string ToJson(const google::protobuf::Message& message, bool one_line);
 
 /// Shortest decimal text that reads back as the same double.
 std::string Num(double v);
+
+/// Prints a simulate response in the context's format: protobuf's JSON for json/jsonl, the
+/// command's own CSV and text writers otherwise. Returns the exit status (0).
+template <typename Response, typename CsvFn, typename TextFn>
+int PrintResponse(const Context& ctx, const Response& response, CsvFn csv, TextFn text) {
+  switch (ctx.format) {
+    case Format::kJson: std::cout << ToJson(response, false) << "\n"; break;
+    case Format::kJsonl: std::cout << ToJson(response, true) << "\n"; break;
+    case Format::kCsv: csv(response); break;
+    case Format::kText: text(response); break;
+  }
+  return 0;
+}
 
 int RunInfo(const Context& ctx, const std::vector<std::string>& args);
 int RunHealth(const Context& ctx, const std::vector<std::string>& args);

@@ -107,13 +107,7 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   v1::SimulateFlightResponse response;
   const grpc::Status status = stub->SimulateFlight(ctx.NewCall().get(), request, &response);
   if (!status.ok()) return ReportRpcError(status);
-  switch (ctx.format) {
-    case Format::kJson: std::cout << ToJson(response, false) << "\n"; break;
-    case Format::kJsonl: std::cout << ToJson(response, true) << "\n"; break;
-    case Format::kCsv: PrintCsv(response); break;
-    case Format::kText: PrintText(response); break;
-  }
-  return 0;
+  return PrintResponse(ctx, response, PrintCsv, PrintText);
 }
 
 }  // namespace

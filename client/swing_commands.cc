@@ -126,13 +126,7 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   v1::SimulateSwingResponse response;
   const grpc::Status status = stub->SimulateSwing(ctx.NewCall().get(), request, &response);
   if (!status.ok()) return ReportRpcError(status);
-  switch (ctx.format) {
-    case Format::kJson: std::cout << ToJson(response, false) << "\n"; break;
-    case Format::kJsonl: std::cout << ToJson(response, true) << "\n"; break;
-    case Format::kCsv: PrintCsv(response); break;
-    case Format::kText: PrintText(response); break;
-  }
-  return 0;
+  return PrintResponse(ctx, response, PrintCsv, PrintText);
 }
 
 }  // namespace

@@ -156,11 +156,7 @@ absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& r) {
   // Automatic sampling keeps about kAutoSamples samples: a stride for fixed steps, a time
   // interval for dp45. Checked after the duration is known to be in range.
   constexpr double kAutoSamples = 5000;
-  if (absl::Status s = swing::ValidateRunOptions(*solver, {.duration_s = run.duration_s,
-                                                            .sample_stride = 1000000});
-      !s.ok()) {
-    return s;
-  }
+  if (absl::Status s = swing::ValidateDuration(run.duration_s); !s.ok()) return s;
   if (r.sample_stride() > 0) {
     run.sample_stride = static_cast<int>(r.sample_stride());
   } else if (solver->integrator == SwingIntegrator::kDp45) {

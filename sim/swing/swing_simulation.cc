@@ -49,11 +49,14 @@ std::optional<std::pair<double, SwingVec>> FindImpactInStep(SwingStepper& steppe
   return std::make_pair(t, stepper.Interpolate(r, t));
 }
 
+absl::Status ValidateDuration(double duration_s) {
+  if (std::isfinite(duration_s) && duration_s >= 1e-6 && duration_s <= 10) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrFormat("duration_s must be finite and in [1e-06, 10] s, got %g", duration_s));
+}
+
 absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRunOptions& run) {
-  if (!(std::isfinite(run.duration_s) && run.duration_s >= 1e-6 && run.duration_s <= 10)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("duration_s must be finite and in [1e-06, 10] s, got %g", run.duration_s));
-  }
+  if (absl::Status s = ValidateDuration(run.duration_s); !s.ok()) return s;
   if (run.sample_stride < 1) {
     return absl::InvalidArgumentError(
         absl::StrFormat("sample_stride must be at least 1, got %d", run.sample_stride));

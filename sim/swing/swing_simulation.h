@@ -65,6 +65,8 @@ struct SwingRunResult {
 /// Derived quantities for state y at time t.
 SwingSample MakeSample(const SwingModel& model, double t_s, const SwingVec& y);
 
+/// duration_s must be finite and in [1e-6, 10] s.
+absl::Status ValidateDuration(double duration_s);
 /// Validates the run options against the solver (sample counts are bounded up front).
 absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRunOptions& run);
 

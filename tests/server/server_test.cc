@@ -1,4 +1,5 @@
 // The real server in-process on an ephemeral loopback port, called through generated stubs.
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <thread>
@@ -31,6 +32,35 @@ class ServerTest : public ::testing::Test {
     auto c = std::make_unique<grpc::ClientContext>();
     c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
     return c;
+  }
+  // A SimulateSwing of `steps` rk4 steps (1e-6 s each) on its own thread, and shutdown of the
+  // server with `grace` once the call has run 200 ms. Fails the test if the call had already
+  // ended by then: a shutdown test whose call was not in flight would test nothing.
+  struct LongCall {
+    grpc::Status status;
+    v1::SimulateSwingResponse response;
+    double shutdown_wait_s = 0;
+  };
+  LongCall ShutdownDuringCall(double dt_s, absl::Duration grace) {
+    auto stub = v1::Swing::NewStub(channel_);
+    v1::SimulateSwingRequest req;
+    req.mutable_solver()->set_dt_s(dt_s);
+    req.set_stop(v1::SWING_STOP_DURATION);
+    req.set_duration_s(10);
+    LongCall out;
+    std::atomic<bool> done{false};
+    std::thread call([&] {
+      out.status = stub->SimulateSwing(Ctx().get(), req, &out.response);
+      done = true;
+    });
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    EXPECT_FALSE(done) << "the call ended before shutdown: make it longer";
+    const auto t0 = std::chrono::steady_clock::now();
+    app_->Shutdown(grace);
+    app_->Wait();
+    out.shutdown_wait_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    call.join();
+    return out;
   }
   std::unique_ptr<ServerApp> app_;
   std::shared_ptr<grpc::Channel> channel_;
@@ -119,20 +149,10 @@ TEST_F(ServerTest, SecondServerOnABusyPortFailsClearly) {
 }
 
 TEST_F(ServerTest, ShutdownLetsAnInFlightCallFinish) {
-  auto stub = v1::Swing::NewStub(channel_);
-  v1::SimulateSwingRequest req;  // ~5e6 RK4 steps: long enough to be in flight at shutdown
-  req.mutable_solver()->set_dt_s(2e-6);
-  req.set_stop(v1::SWING_STOP_DURATION);
-  req.set_duration_s(10);
-  grpc::Status status;
-  v1::SimulateSwingResponse resp;
-  std::thread call([&] { status = stub->SimulateSwing(Ctx().get(), req, &resp); });
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  app_->Shutdown(absl::Seconds(20));
-  app_->Wait();
-  call.join();
-  EXPECT_TRUE(status.ok()) << status.error_message();
-  EXPECT_EQ(resp.end_t_s(), 10.0);
+  // 5e6 rk4 steps (~1.2 s): in flight at shutdown, well inside the 20 s grace.
+  const LongCall c = ShutdownDuringCall(2e-6, absl::Seconds(20));
+  EXPECT_TRUE(c.status.ok()) << c.status.error_message();
+  EXPECT_EQ(c.response.end_t_s(), 10.0);
 }
 
 TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
@@ -165,22 +185,10 @@ TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
 // Shutdown with a short grace cancels a long call, and the run notices (it polls IsCancelled):
 // the server stops within the grace plus one poll, not when the simulation would have ended.
 TEST_F(ServerTest, ShutdownGraceCancelsALongRun) {
-  auto stub = v1::Swing::NewStub(channel_);
-  v1::SimulateSwingRequest req;  // 1e7 rk4 steps, ~2.5 s of CPU if left alone
-  req.mutable_solver()->set_dt_s(1e-6);
-  req.set_stop(v1::SWING_STOP_DURATION);
-  req.set_duration_s(10);
-  grpc::Status status;
-  v1::SimulateSwingResponse resp;
-  std::thread call([&] { status = stub->SimulateSwing(Ctx().get(), req, &resp); });
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  const auto t0 = std::chrono::steady_clock::now();
-  app_->Shutdown(absl::Milliseconds(100));
-  app_->Wait();
-  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  call.join();
-  EXPECT_FALSE(status.ok());
-  EXPECT_LT(waited, 1.5);
+  // 1e7 rk4 steps (~2.5 s if left alone) against a 100 ms grace.
+  const LongCall c = ShutdownDuringCall(1e-6, absl::Milliseconds(100));
+  EXPECT_FALSE(c.status.ok());
+  EXPECT_LT(c.shutdown_wait_s, 1.5);
 }
 
 TEST(ListenAddressTest, ParsesAndRejects) {
