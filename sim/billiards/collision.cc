@@ -1,0 +1,93 @@
+#include "sim/billiards/collision.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "sim/billiards/cloth.h"
+
+namespace sportsim::billiards {
+
+bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b) {
+  Eigen::Vector3d n = b->r - a->r;
+  n.z() = 0.0;
+  const double dist = n.norm();
+  if (dist == 0.0) return false;
+  n /= dist;
+  const Eigen::Vector3d v_rel = a->v - b->v;
+  const double approach = v_rel.dot(n);
+  if (approach <= 0.0) return false;
+  const PhysicsParams& p = model.params();
+  const double m = model.mass();
+  const double radius = model.radius();
+  const double jn = (1.0 + p.e_ball) * 0.5 * m * approach;
+  Eigen::Vector3d impulse_a = -jn * n;  // on ball a; ball b gets the opposite
+  Eigen::Vector3d dw = Eigen::Vector3d::Zero();
+  if ((disabled & kEffectBallFriction) == 0) {
+    const Eigen::Vector3d u = v_rel + radius * (a->w + b->w).cross(n);
+    const Eigen::Vector3d ut = u - u.dot(n) * n;
+    const double slip = ut.norm();
+    if (slip > 0.0) {
+      const double mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * v_rel.norm());
+      const double pt = std::min(mu * jn, m * slip / 7.0);
+      const Eigen::Vector3d friction = -(pt / slip) * ut;
+      impulse_a += friction;
+      // The same torque (R n x P) turns both balls: b gets -P at -R n.
+      dw = (radius / model.inertia()) * n.cross(friction);
+    }
+  }
+  Eigen::Vector3d dv = impulse_a / m;
+  dv.z() = 0.0;  // the slate takes the vertical part
+  a->v += dv;
+  b->v -= dv;
+  a->w += dw;
+  b->w += dw;
+  a->state = Classify(model, *a);
+  b->state = Classify(model, *b);
+  return true;
+}
+
+bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball* ball) {
+  const Eigen::Vector3d nh(normal.x(), normal.y(), 0.0);
+  const double vn = ball->v.dot(nh);
+  if (vn >= 0.0) return false;
+  const PhysicsParams& p = model.params();
+  if (p.cushion_model == CushionModel::kMirror) {
+    ball->v -= 2.0 * vn * nh;
+  } else {
+    // The nose touches the ball at angle theta_a above its equator: contact point
+    // r_c = R (-cos nh + sin z^), contact normal into the ball n = cos nh - sin z^.
+    const double m = model.mass();
+    const double radius = model.radius();
+    const double s = model.cushion_sin();
+    const double c = std::sqrt(1.0 - s * s);
+    const Eigen::Vector3d rc = radius * (-c * nh + s * Eigen::Vector3d::UnitZ());
+    const Eigen::Vector3d n = c * nh - s * Eigen::Vector3d::UnitZ();
+    const double jn = -(1.0 + p.e_cushion) * m * ball->v.dot(n);
+    // Slip of the contact point across the nose; Coulomb friction capped at sticking, where
+    // 7/(2m) is a free sphere's inverse effective mass for a tangential impulse at its surface.
+    const Eigen::Vector3d vc = ball->v + ball->w.cross(rc);
+    const Eigen::Vector3d st = vc - vc.dot(n) * n;
+    Eigen::Vector3d friction = Eigen::Vector3d::Zero();
+    const double slip = st.norm();
+    if (slip > 0.0) {
+      const double pt = std::min(p.f_cushion * jn, 2.0 * m * slip / 7.0);
+      friction = -(pt / slip) * st;
+    }
+    ball->v += (jn * n + friction) / m;
+    ball->v.z() = 0.0;  // the slate absorbs the downward push; jumps are not modelled
+    ball->w += rc.cross(friction) / model.inertia();
+  }
+  ball->state = Classify(model, *ball);
+  return true;
+}
+
+Eigen::Vector2d ClosestOnSegment(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                 const Eigen::Vector2d& p) {
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  if (len2 == 0.0) return a;
+  const double s = std::clamp((p - a).dot(ab) / len2, 0.0, 1.0);
+  return a + s * ab;
+}
+
+}  // namespace sportsim::billiards

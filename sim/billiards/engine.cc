@@ -1,0 +1,540 @@
+#include "sim/billiards/engine.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+#include "absl/strings/str_format.h"
+#include "sim/billiards/cloth.h"
+#include "sim/billiards/collision.h"
+#include "sim/core/check.h"
+#include "sim/core/root_find.h"
+
+namespace sportsim::billiards {
+namespace {
+
+constexpr std::array<std::string_view, 2> kEngines = {"event", "stepped"};
+constexpr std::array<std::string_view, 3> kIntegrators = {"euler", "semi_implicit_euler", "rk4"};
+
+// A pair closer than this counts as touching (m): frozen balls collide at once when approaching.
+constexpr double kTouch = 1e-9;
+// Contact times are found to this precision (s): at 20 m/s, 2e-12 m of overlap at most.
+constexpr double kTimeTol = 1e-13;
+// A step that splits into more sub-steps than this is a runaway (a Zeno cascade).
+constexpr int kMaxSubsteps = 1000000;
+
+bool Translating(const Ball& b) {
+  return b.state == MotionState::kSliding || b.state == MotionState::kRolling;
+}
+bool Moving(const Ball& b) { return Translating(b) || b.state == MotionState::kSpinning; }
+
+// One integrator step of length h in the ball's current motion state.
+void IntegrateBall(const TableModel& model, uint32_t disabled, Integrator integrator, double h,
+                   Ball* b) {
+  if (!Moving(*b) || h <= 0.0) return;
+  const MotionState s = b->state;
+  const Eigen::Vector3d w0 = b->w;
+  switch (integrator) {
+    case Integrator::kEuler: {
+      const Rates k = ClothRates(model, disabled, s, b->v, b->w);
+      b->r += h * b->v;
+      b->v += h * k.dv;
+      b->w += h * k.dw;
+      break;
+    }
+    case Integrator::kSemiImplicitEuler: {
+      const Rates k = ClothRates(model, disabled, s, b->v, b->w);
+      b->v += h * k.dv;
+      b->w += h * k.dw;
+      b->r += h * b->v;
+      break;
+    }
+    case Integrator::kRk4: {
+      const Eigen::Vector3d v0 = b->v;
+      const Rates k1 = ClothRates(model, disabled, s, v0, w0);
+      const Eigen::Vector3d v2 = v0 + 0.5 * h * k1.dv;
+      const Rates k2 = ClothRates(model, disabled, s, v2, w0 + 0.5 * h * k1.dw);
+      const Eigen::Vector3d v3 = v0 + 0.5 * h * k2.dv;
+      const Rates k3 = ClothRates(model, disabled, s, v3, w0 + 0.5 * h * k2.dw);
+      const Eigen::Vector3d v4 = v0 + h * k3.dv;
+      const Rates k4 = ClothRates(model, disabled, s, v4, w0 + h * k3.dw);
+      b->r += (h / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
+      b->v += (h / 6.0) * (k1.dv + 2.0 * k2.dv + 2.0 * k3.dv + k4.dv);
+      b->w += (h / 6.0) * (k1.dw + 2.0 * k2.dw + 2.0 * k3.dw + k4.dw);
+      break;
+    }
+  }
+  b->r.z() = model.radius();
+  b->v.z() = 0.0;
+  if (s == MotionState::kSpinning) b->v.setZero();
+  if ((disabled & kEffectOrientation) == 0) {
+    // Rotate by the mean angular velocity over the step (exact about a fixed axis).
+    const Eigen::Vector3d rot = 0.5 * h * (w0 + b->w);
+    const double angle = rot.norm();
+    if (angle > 0.0) {
+      b->q = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, rot / angle)) * b->q).normalized();
+    }
+  }
+}
+
+enum class ContactKind : uint8_t { kBall = 0, kCushion = 1, kPocket = 2 };
+
+struct Contact {
+  double tau = std::numeric_limits<double>::infinity();
+  ContactKind kind = ContactKind::kBall;
+  int a = -1, b = -1, other = -1;
+  bool found() const { return a >= 0; }
+  // Deterministic total order: time, kind, then ids.
+  bool Before(const Contact& o) const {
+    return std::tie(tau, kind, a, b, other) < std::tie(o.tau, o.kind, o.a, o.b, o.other);
+  }
+};
+
+// Closest point parameter of the chord p0 -> p1 to point c, and the distance.
+std::pair<double, double> ChordToPoint(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
+                                       const Eigen::Vector2d& c) {
+  const Eigen::Vector2d d = p1 - p0;
+  const double len2 = d.squaredNorm();
+  const double s = len2 > 0 ? std::clamp((c - p0).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return {s, (p0 + s * d - c).norm()};
+}
+
+double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// Closest approach of the chord p0 -> p1 to the segment [a, b]: (chord parameter, distance).
+std::pair<double, double> ChordToSegment(const Eigen::Vector2d& p0, const Eigen::Vector2d& p1,
+                                         const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d d = p1 - p0;
+  const Eigen::Vector2d e = b - a;
+  const double den = Cross(d, e);
+  if (den != 0.0) {
+    const double s = Cross(a - p0, e) / den;
+    const double t = Cross(a - p0, d) / den;
+    if (s >= 0 && s <= 1 && t >= 0 && t <= 1) return {s, 0.0};
+  }
+  std::pair<double, double> best{0.0, (p0 - ClosestOnSegment(a, b, p0)).norm()};
+  const double d1 = (p1 - ClosestOnSegment(a, b, p1)).norm();
+  if (d1 < best.second) best = {1.0, d1};
+  for (const Eigen::Vector2d& q : {a, b}) {
+    const auto [s, dist] = ChordToPoint(p0, p1, q);
+    if (dist < best.second) best = {s, dist};
+  }
+  return best;
+}
+
+class SteppedEngine {
+ public:
+  SteppedEngine(const TableModel& model, const SolverOptions& options, TableState* state,
+                std::vector<Event>* events)
+      : model_(model), o_(options), s_(state), events_(events), n_(state->balls.size()) {
+    trial_.resize(n_);
+    next_.resize(n_);
+    margin_.resize(n_);
+  }
+
+  absl::Status Run(double t_end) {
+    const double dt = o_.dt_s;
+    while (s_->t_s < t_end) {
+      if (s_->AtRest()) {
+        s_->t_s = t_end;
+        break;
+      }
+      // Next grid point after t (a t already on the grid, to rounding, counts as on it).
+      const double k = std::floor(s_->t_s / dt * (1.0 + 1e-12) + 1e-9);
+      const double t_next = std::min((k + 1.0) * dt, t_end);
+      if (absl::Status st = Step(t_next); !st.ok()) return st;
+      s_->t_s = t_next;
+    }
+    return absl::OkStatus();
+  }
+
+ private:
+  Ball At(int i, double tau) const {
+    Ball b = s_->balls[i];
+    IntegrateBall(model_, o_.disabled, o_.integrator, tau, &b);
+    return b;
+  }
+  Eigen::Vector2d PosAt(int i, double tau) const { return At(i, tau).r.head<2>(); }
+
+  void Record(Event e) { events_->push_back(std::move(e)); }
+
+  void RecordTransition(int i, MotionState from) {
+    const Ball& b = s_->balls[i];
+    if (b.state == from) return;
+    Record({.t_s = s_->t_s, .kind = EventKind::kTransition, .a = i, .from = from, .to = b.state,
+            .va = b.v.head<2>()});
+  }
+
+  absl::Status Step(double t_end) {
+    const double t0 = s_->t_s;
+    const double h = t_end - t0;
+    double done = 0.0;
+    for (int sub = 0; done < h; ++sub) {
+      if (sub >= kMaxSubsteps) {
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "more than %d collisions and transitions within one step at t = %.9f s", kMaxSubsteps,
+            s_->t_s));
+      }
+      if (static_cast<int64_t>(events_->size()) > o_.max_events) {
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "event cap of %d reached at t = %.9f s", o_.max_events, s_->t_s));
+      }
+      // 1. The sub-step ends at the earliest transition.
+      double tau = h - done;
+      for (size_t i = 0; i < n_; ++i) {
+        next_[i] = Moving(s_->balls[i]) ? TimeToTransition(model_, o_.disabled, s_->balls[i])
+                                        : NextTransition{};
+        tau = std::min(tau, next_[i].dt_s);
+      }
+      // 2. Trial positions at the end of the sub-step.
+      for (size_t i = 0; i < n_; ++i) {
+        if (!Moving(s_->balls[i])) continue;
+        trial_[i] = At(static_cast<int>(i), tau);
+        const Rates r = ClothRates(model_, o_.disabled, s_->balls[i].state, s_->balls[i].v,
+                                   s_->balls[i].w);
+        // The path bends away from its chord by at most |a| tau^2 / 4 for any of our schemes.
+        margin_[i] = 0.25 * r.dv.norm() * tau * tau + 1e-12;
+      }
+      // 3. Continuous collision detection: the earliest contact within the sub-step.
+      if (o_.ccd) {
+        const Contact c = EarliestContact(tau);
+        if (c.found()) {
+          for (size_t i = 0; i < n_; ++i) {
+            if (Moving(s_->balls[i])) {
+              IntegrateBall(model_, o_.disabled, o_.integrator, c.tau, &s_->balls[i]);
+            }
+          }
+          done += c.tau;
+          s_->t_s = t0 + done;
+          Resolve(c);
+          if (absl::Status st = CheckFinite(); !st.ok()) return st;
+          continue;
+        }
+      }
+      for (size_t i = 0; i < n_; ++i) {
+        if (Moving(s_->balls[i])) s_->balls[i] = trial_[i];
+      }
+      done += tau;
+      s_->t_s = t0 + done;
+      // 4. Transitions due now.
+      for (size_t i = 0; i < n_; ++i) {
+        if (next_[i].kind == TransitionKind::kNone || next_[i].dt_s > tau) continue;
+        Ball& b = s_->balls[i];
+        if ((o_.disabled & kEffectDrag) == 0) {
+          // With drag the predicted time is an estimate: snap only when the quantity has
+          // (nearly) reached zero, else predict again.
+          const NextTransition again = TimeToTransition(model_, o_.disabled, b);
+          if (again.kind == next_[i].kind && again.dt_s > 1e-9) continue;
+        }
+        const MotionState from = b.state;
+        ApplyTransition(model_, next_[i].kind, &b);
+        RecordTransition(static_cast<int>(i), from);
+      }
+      // 5. Without CCD: contacts only where balls overlap at the end of the sub-step.
+      if (!o_.ccd) DiscreteContacts();
+      LeaveTable();
+      if (absl::Status st = CheckFinite(); !st.ok()) return st;
+    }
+    return absl::OkStatus();
+  }
+
+  // Earliest contact in [0, tau] among ball pairs, cushions and pockets.
+  Contact EarliestContact(double tau) const {
+    Contact best;
+    const double radius = model_.radius();
+    const auto consider = [&best](const Contact& c) {
+      if (c.Before(best)) best = c;
+    };
+    // Finds the first zero of g on [0, tau] given g(0) > 0 and the chord's closest approach at
+    // s_c, or returns +inf.
+    const auto first_root = [&](auto&& g, double g0, double s_c) -> double {
+      const double tc = s_c * tau;
+      if (tc > 0.0) {
+        const double gc = g(tc);
+        if (gc <= 0.0) return FindBracketedRoot(g, 0.0, tc, g0, gc, kTimeTol);
+      }
+      if (s_c < 1.0) {
+        const double g1 = g(tau);
+        if (g1 <= 0.0) return FindBracketedRoot(g, 0.0, tau, g0, g1, kTimeTol);
+      }
+      return std::numeric_limits<double>::infinity();
+    };
+    const auto& balls = s_->balls;
+    for (size_t i = 0; i < n_; ++i) {
+      const Ball& bi = balls[i];
+      if (bi.state == MotionState::kPocketed) continue;
+      const bool ti = Translating(bi);
+      const Eigen::Vector2d p0i = bi.r.head<2>();
+      const Eigen::Vector2d p1i = ti ? trial_[i].r.head<2>() : p0i;
+      // Ball pairs.
+      for (size_t j = i + 1; j < n_; ++j) {
+        const Ball& bj = balls[j];
+        if (bj.state == MotionState::kPocketed) continue;
+        const bool tj = Translating(bj);
+        if (!ti && !tj) continue;
+        const Eigen::Vector2d p1j = tj ? trial_[j].r.head<2>() : bj.r.head<2>();
+        const Eigen::Vector2d rel0 = bj.r.head<2>() - p0i;
+        const Eigen::Vector2d rel1 = p1j - p1i;
+        const auto [s_c, dmin] = ChordToPoint(rel0, rel1, Eigen::Vector2d::Zero());
+        const double slack = (ti ? margin_[i] : 0.0) + (tj ? margin_[j] : 0.0);
+        if (dmin > 2.0 * radius + slack) continue;
+        const double g0 = rel0.norm() - 2.0 * radius;
+        Contact c{.kind = ContactKind::kBall, .a = static_cast<int>(i), .b = static_cast<int>(j)};
+        if (g0 <= kTouch) {
+          if ((bi.v - bj.v).head<2>().dot(rel0) > 0.0) {
+            c.tau = 0.0;
+            consider(c);
+          }
+          continue;
+        }
+        const auto g = [&](double t) {
+          return (PosAt(static_cast<int>(j), t) - PosAt(static_cast<int>(i), t)).norm() -
+                 2.0 * radius;
+        };
+        c.tau = first_root(g, g0, s_c);
+        if (c.tau <= tau) consider(c);
+      }
+      if (!ti) continue;
+      // Cushions.
+      if (model_.spec().bounded && (o_.disabled & kEffectCushions) == 0) {
+        const double dc = model_.cushion_contact_distance();
+        const auto& cushions = model_.spec().cushions;
+        for (size_t k = 0; k < cushions.size(); ++k) {
+          const CushionSegment& seg = cushions[k];
+          const auto [s_c, dmin] = ChordToSegment(p0i, p1i, seg.a, seg.b);
+          if (dmin > dc + margin_[i]) continue;
+          const Eigen::Vector2d near0 = ClosestOnSegment(seg.a, seg.b, p0i);
+          const double g0 = (p0i - near0).norm() - dc;
+          Contact c{.kind = ContactKind::kCushion, .a = static_cast<int>(i),
+                    .other = static_cast<int>(k)};
+          if (g0 <= kTouch) {
+            if (bi.v.head<2>().dot(p0i - near0) < 0.0) {
+              c.tau = 0.0;
+              consider(c);
+            }
+            continue;
+          }
+          const auto g = [&](double t) {
+            const Eigen::Vector2d p = PosAt(static_cast<int>(i), t);
+            return (p - ClosestOnSegment(seg.a, seg.b, p)).norm() - dc;
+          };
+          c.tau = first_root(g, g0, s_c);
+          if (c.tau <= tau) consider(c);
+        }
+      }
+      // Pockets.
+      if (model_.spec().bounded && (o_.disabled & kEffectPockets) == 0) {
+        const auto& pockets = model_.spec().pockets;
+        for (size_t k = 0; k < pockets.size(); ++k) {
+          const Pocket& pk = pockets[k];
+          const auto [s_c, dmin] = ChordToPoint(p0i, p1i, pk.centre);
+          if (dmin > pk.radius_m + margin_[i]) continue;
+          const double g0 = (p0i - pk.centre).norm() - pk.radius_m;
+          Contact c{.kind = ContactKind::kPocket, .a = static_cast<int>(i),
+                    .other = static_cast<int>(k)};
+          if (g0 <= 0.0) {
+            c.tau = 0.0;
+            consider(c);
+            continue;
+          }
+          const auto g = [&](double t) {
+            return (PosAt(static_cast<int>(i), t) - pk.centre).norm() - pk.radius_m;
+          };
+          c.tau = first_root(g, g0, s_c);
+          if (c.tau <= tau) consider(c);
+        }
+      }
+    }
+    return best;
+  }
+
+  void Resolve(const Contact& c) {
+    auto& balls = s_->balls;
+    switch (c.kind) {
+      case ContactKind::kBall: {
+        Ball& a = balls[c.a];
+        Ball& b = balls[c.b];
+        const MotionState fa = a.state, fb = b.state;
+        if (!CollideBalls(model_, o_.disabled, &a, &b)) return;
+        Record({.t_s = s_->t_s, .kind = EventKind::kBallBall, .a = c.a, .b = c.b,
+                .va = a.v.head<2>(), .vb = b.v.head<2>()});
+        RecordTransition(c.a, fa);
+        RecordTransition(c.b, fb);
+        break;
+      }
+      case ContactKind::kCushion: {
+        Ball& a = balls[c.a];
+        const CushionSegment& seg = model_.spec().cushions[c.other];
+        const Eigen::Vector2d p = a.r.head<2>();
+        const Eigen::Vector2d n = (p - ClosestOnSegment(seg.a, seg.b, p)).normalized();
+        const MotionState fa = a.state;
+        if (!CollideCushion(model_, n, &a)) return;
+        Record({.t_s = s_->t_s, .kind = EventKind::kBallCushion, .a = c.a, .other = c.other,
+                .va = a.v.head<2>()});
+        RecordTransition(c.a, fa);
+        break;
+      }
+      case ContactKind::kPocket:
+        Capture(c.a, c.other);
+        break;
+    }
+  }
+
+  void Capture(int i, int pocket) {
+    Ball& b = s_->balls[i];
+    const MotionState from = b.state;
+    b.v.setZero();
+    b.w.setZero();
+    b.state = MotionState::kPocketed;
+    b.pocket = pocket;
+    Record({.t_s = s_->t_s, .kind = EventKind::kBallPocket, .a = i, .other = pocket});
+    RecordTransition(i, from);
+  }
+
+  // Contacts by overlap at the end of a sub-step (CCD off): what a naive stepper does.
+  void DiscreteContacts() {
+    auto& balls = s_->balls;
+    const double radius = model_.radius();
+    for (size_t i = 0; i < n_; ++i) {
+      if (balls[i].state == MotionState::kPocketed) continue;
+      for (size_t j = i + 1; j < n_; ++j) {
+        if (balls[j].state == MotionState::kPocketed) continue;
+        if ((balls[j].r - balls[i].r).head<2>().norm() < 2.0 * radius) {
+          Resolve({.tau = 0, .kind = ContactKind::kBall, .a = static_cast<int>(i),
+                   .b = static_cast<int>(j)});
+        }
+      }
+      if (!Translating(balls[i]) || !model_.spec().bounded) continue;
+      const Eigen::Vector2d p = balls[i].r.head<2>();
+      if ((o_.disabled & kEffectCushions) == 0) {
+        const auto& cushions = model_.spec().cushions;
+        for (size_t k = 0; k < cushions.size(); ++k) {
+          if ((p - ClosestOnSegment(cushions[k].a, cushions[k].b, p)).norm() <
+              model_.cushion_contact_distance()) {
+            Resolve({.tau = 0, .kind = ContactKind::kCushion, .a = static_cast<int>(i),
+                     .other = static_cast<int>(k)});
+          }
+        }
+      }
+      if ((o_.disabled & kEffectPockets) == 0) {
+        const auto& pockets = model_.spec().pockets;
+        for (size_t k = 0; k < pockets.size(); ++k) {
+          if ((p - pockets[k].centre).norm() <= pockets[k].radius_m) {
+            Capture(static_cast<int>(i), static_cast<int>(k));
+            break;
+          }
+        }
+      }
+    }
+  }
+
+  // A ball whose centre is past a cushion line by more than a radius has left the table (only
+  // possible with cushions off, or through a cushion with CCD off).
+  void LeaveTable() {
+    if (!model_.spec().bounded) return;
+    const double hx = 0.5 * model_.spec().length_m + model_.radius();
+    const double hy = 0.5 * model_.spec().width_m + model_.radius();
+    for (size_t i = 0; i < n_; ++i) {
+      const Ball& b = s_->balls[i];
+      if (b.state == MotionState::kPocketed) continue;
+      if (std::abs(b.r.x()) > hx || std::abs(b.r.y()) > hy) Capture(static_cast<int>(i), -1);
+    }
+  }
+
+  absl::Status CheckFinite() const {
+    for (const Ball& b : s_->balls) {
+      if (!b.r.allFinite() || !b.v.allFinite() || !b.w.allFinite()) {
+        return absl::InternalError(
+            absl::StrFormat("ball %s: state became non-finite at t = %.9f s", b.id, s_->t_s));
+      }
+    }
+    return absl::OkStatus();
+  }
+
+  const TableModel& model_;
+  const SolverOptions& o_;
+  TableState* s_;
+  std::vector<Event>* events_;
+  size_t n_;
+  std::vector<Ball> trial_;
+  std::vector<NextTransition> next_;
+  std::vector<double> margin_;
+};
+
+}  // namespace
+
+std::span<const std::string_view> EngineNames() { return kEngines; }
+std::span<const std::string_view> IntegratorNames() { return kIntegrators; }
+
+bool EngineFromName(std::string_view name, Engine* out) {
+  if (name == "event") { *out = Engine::kEvent; return true; }
+  if (name == "stepped") { *out = Engine::kStepped; return true; }
+  return false;
+}
+
+bool IntegratorFromName(std::string_view name, Integrator* out) {
+  for (size_t i = 0; i < kIntegrators.size(); ++i) {
+    if (kIntegrators[i] == name) {
+      *out = static_cast<Integrator>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string_view EngineName(Engine e) { return e == Engine::kEvent ? "event" : "stepped"; }
+std::string_view IntegratorName(Integrator i) { return kIntegrators[static_cast<size_t>(i)]; }
+
+absl::Status ValidateSolverOptions(const SolverOptions& o) {
+  if (o.engine != Engine::kStepped && o.engine != Engine::kEvent) {
+    return absl::InvalidArgumentError("engine must be event or stepped");
+  }
+  if (static_cast<size_t>(o.integrator) >= kIntegrators.size()) {
+    return absl::InvalidArgumentError("integrator must be euler, semi_implicit_euler or rk4");
+  }
+  if (absl::Status s = CheckFiniteInRange("dt_s", o.dt_s, 1e-6, false, 0.1, false); !s.ok()) {
+    return s;
+  }
+  if ((o.disabled & ~static_cast<uint32_t>(kEffectAll)) != 0) {
+    return absl::InvalidArgumentError(absl::StrFormat("unknown effect bits 0x%x", o.disabled));
+  }
+  if (o.max_events < 1 || o.max_events > 10'000'000) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("max_events must be in [1, 10000000], got %d", o.max_events));
+  }
+  if (o.engine == Engine::kEvent) {
+    if ((o.disabled & kEffectDrag) == 0) {
+      return absl::InvalidArgumentError(
+          "the event engine cannot model air drag (it has no closed form): use engine stepped "
+          "or disable drag");
+    }
+    return absl::UnimplementedError("the event engine is not built yet: use engine stepped");
+  }
+  return absl::OkStatus();
+}
+
+absl::Status Advance(const TableModel& model, const SolverOptions& options, double t_end_s,
+                     TableState* state, std::vector<Event>* events) {
+  if (absl::Status s = ValidateSolverOptions(options); !s.ok()) return s;
+  if (!(std::isfinite(t_end_s) && t_end_s >= state->t_s)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "t_end_s must be finite and not before the table's time %g s, got %g", state->t_s,
+        t_end_s));
+  }
+  SteppedEngine engine(model, options, state, events);
+  return engine.Run(t_end_s);
+}
+
+double TotalKineticEnergy(const TableModel& model, const TableState& state) {
+  double e = 0.0;
+  for (const Ball& b : state.balls) {
+    if (b.state != MotionState::kPocketed) e += KineticEnergy(model, b);
+  }
+  return e;
+}
+
+}  // namespace sportsim::billiards

@@ -1,0 +1,162 @@
+// Billiards model: ball, cloth, collision and cue parameters, and table geometry (playing area,
+// cushion segments, pockets). Constant during a simulation; the changing part is TableState.
+//
+// Frame: origin at the centre of the playing surface, x along the long axis, y across, z up. A
+// ball on the cloth has its centre at z = R. All values SI (m, s, kg, rad).
+//
+// Sources for the values (see also docs/billiards.md):
+// - WPA equipment specifications (pool table playing areas, pocket mouths and jaw angles, ball
+//   57.15 mm / 156-170 g, cushion nose height 62.5-64.5 % of the ball diameter).
+// - WPBSA table specification (snooker playing area 3569 x 1778 mm, balls 52.5 mm).
+// - UMB (carom match table 2840 x 1420 mm, balls 61-61.5 mm, 205-220 g).
+// - D. Alciatore, technical proofs TP A-14 (ball-ball friction), TP A-30/A-31 (cue strike,
+//   squirt), and the "typical values" FAQ (billiards.colostate.edu): mu_s 0.2, mu_r 0.01,
+//   spin-down about 10 rad/s^2, e_b 0.95, e_c 0.85.
+// - W. Leckie, M. Greenspan, "An event-based pool physics simulator", ACG 11 (2006).
+// - I. Han, "Dynamics in carom and three cushion billiards", J. Mech. Sci. Tech. 19 (2005).
+#ifndef SPORTSIM_SIM_BILLIARDS_MODEL_H_
+#define SPORTSIM_SIM_BILLIARDS_MODEL_H_
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "Eigen/Core"
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+
+namespace sportsim::billiards {
+
+/// Physical effects that can be switched off (bits of SolverOptions::disabled; 0 = everything
+/// on). A switched-off effect is skipped, not multiplied by zero.
+enum Effect : uint32_t {
+  kEffectDrag = 1u << 0,               ///< air drag on the ball (stepped engine only)
+  kEffectSpinDecay = 1u << 1,          ///< spin-down of the vertical spin component
+  kEffectRollingResistance = 1u << 2,  ///< rolling resistance (a rolling ball never slows)
+  kEffectBallFriction = 1u << 3,       ///< ball-ball friction (off: frictionless collisions)
+  kEffectCushions = 1u << 4,           ///< cushions and jaws (off: balls leave the table)
+  kEffectPockets = 1u << 5,            ///< pocket capture
+  kEffectOrientation = 1u << 6,        ///< orientation (quaternion) tracking
+  kEffectSquirt = 1u << 7,             ///< cue-ball squirt (deflection with english)
+  kEffectAll = (1u << 8) - 1,
+};
+
+/// Names of the effects, in bit order ("drag", "spin_decay", ...).
+std::span<const std::string_view> EffectNames();
+/// The bit of an effect name; 0 for an unknown name.
+uint32_t EffectFromName(std::string_view name);
+
+/// How a ball bounces off a cushion.
+enum class CushionModel : uint8_t {
+  /// Rigid-body impulse at the cushion nose (above the ball's centre): restitution e_c along the
+  /// contact normal, Coulomb friction f_c capped at sticking, the slate absorbing the vertical
+  /// part. The geometry is Han's (2005); the impulse law is written in vector form in
+  /// docs/billiards.md.
+  kHan,
+  /// Mirror: the normal velocity component reverses, nothing else changes (tests).
+  kMirror,
+};
+
+/// Numeric model parameters, with the typical pool values as defaults. Every field can be set by
+/// name (see ParamInfos()).
+struct PhysicsParams {
+  double gravity_mps2 = 9.81;          ///< g (m/s^2)
+  double ball_radius_m = 0.028575;     ///< R (m): WPA pool ball, 57.15 mm diameter
+  double ball_mass_kg = 0.170;         ///< m (kg); inertia I = 2/5 m R^2
+  double mu_slide = 0.2;               ///< sliding friction: dv/dt = -mu_s g u^ while sliding
+  double mu_roll = 0.01;               ///< rolling resistance: dv/dt = -mu_r g v^ while rolling
+  double spin_decel_rps2 = 10.0;       ///< spin-down: d(omega_z)/dt = -this sgn(omega_z) (rad/s^2)
+  double e_ball = 0.95;                ///< ball-ball restitution e_b
+  double mu_ball_a = 0.00995;          ///< ball-ball friction mu = a + b exp(-c |v_rel|) (TP A-14)
+  double mu_ball_b = 0.108;            ///< (see mu_ball_a)
+  double mu_ball_c_spm = 1.088;        ///< c (s/m) (see mu_ball_a)
+  double e_cushion = 0.85;             ///< ball-cushion restitution e_c (along the contact normal)
+  double f_cushion = 0.2;              ///< ball-cushion friction coefficient f_c
+  double cushion_height_m = 0.036;     ///< h: cushion nose above the slate (m); R < h < 2R
+  double cue_mass_kg = 0.54;           ///< M: cue mass (kg), 19 oz
+  double cue_end_mass_kg = 0.170 / 30; ///< m_e: the cue's effective end mass for squirt (kg)
+  double miscue_limit = 0.5;           ///< largest sqrt(a^2 + b^2) (fraction of R) that is no miscue
+  double air_density_kgpm3 = 1.2;      ///< rho for air drag (kg/m^3)
+  double drag_coefficient = 0.5;       ///< C_d: F = -1/2 rho C_d pi R^2 |v| v (sphere, Re ~ 1e4)
+  double spin_drag_coefficient = 0.01; ///< C_m: torque = -1/2 rho C_m R^5 |w| w (order of magnitude)
+  CushionModel cushion_model = CushionModel::kHan;
+};
+
+/// One named numeric parameter: what `--param NAME=VALUE` and GetInfo expose.
+struct ParamInfo {
+  std::string_view name;
+  std::string_view unit;
+  std::string_view description;
+  double PhysicsParams::*field;
+  double lo, hi;  ///< allowed closed range, checked by ValidateParams
+};
+std::span<const ParamInfo> ParamInfos();
+/// Sets a parameter by name; InvalidArgument for unknown names or values out of range.
+absl::Status SetParam(std::string_view name, double value, PhysicsParams* params);
+/// Every parameter in range, and the cushion nose between R and 2R.
+absl::Status ValidateParams(const PhysicsParams& p);
+
+/// A straight cushion (rail or jaw) at the nose height, from `a` to `b`. A ball touches it when
+/// its centre is the contact distance from the segment (endpoints included: rounded points).
+struct CushionSegment {
+  Eigen::Vector2d a, b;
+  std::string name;  ///< e.g. "rail_top_left", "jaw_top_right_corner_a"
+};
+
+/// A pocket: a ball whose centre enters the capture circle falls in.
+struct Pocket {
+  Eigen::Vector2d centre;
+  double radius_m = 0.0;
+  std::string name;  ///< "top_left", "bottom_side", ...
+};
+
+/// Table geometry. `length_m` x `width_m` is the playing area between cushion noses; an
+/// unbounded table has no cushions or pockets (the chapter's scene).
+struct TableSpec {
+  std::string name;
+  bool bounded = true;
+  double length_m = 2.54;
+  double width_m = 1.27;
+  std::vector<CushionSegment> cushions;
+  std::vector<Pocket> pockets;
+  PhysicsParams params;  ///< the preset's defaults (ball size, cushion height)
+};
+
+/// Preset names: pool-7ft, pool-8ft, pool-9ft, snooker, carom, unbounded.
+std::span<const std::string_view> TablePresetNames();
+/// Builds a preset's geometry and default parameters. NotFound-style InvalidArgument for an
+/// unknown name.
+absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name);
+
+/// A validated, immutable model: geometry, parameters and the constants the engines use.
+class TableModel {
+ public:
+  /// Validates the parameters (ranges above) and the geometry against the ball size.
+  static absl::StatusOr<TableModel> Create(TableSpec spec);
+
+  const TableSpec& spec() const { return spec_; }
+  const PhysicsParams& params() const { return spec_.params; }
+  double radius() const { return spec_.params.ball_radius_m; }
+  double mass() const { return spec_.params.ball_mass_kg; }
+  double inertia() const { return inertia_; }  ///< I = 2/5 m R^2 (kg m^2)
+  /// Horizontal distance from a ball's centre to a cushion nose line at contact:
+  /// sqrt(R^2 - (h - R)^2), since the nose touches the ball above its equator.
+  double cushion_contact_distance() const { return cushion_contact_; }
+  /// sin of the angle of the cushion contact point above the ball's equator: (h - R) / R.
+  double cushion_sin() const { return cushion_sin_; }
+  /// Whether (x, y) is inside the playing area (always true on an unbounded table).
+  bool OnCloth(const Eigen::Vector2d& p) const;
+
+ private:
+  explicit TableModel(TableSpec spec);
+  TableSpec spec_;
+  double inertia_ = 0.0;
+  double cushion_contact_ = 0.0;
+  double cushion_sin_ = 0.0;
+};
+
+}  // namespace sportsim::billiards
+
+#endif  // SPORTSIM_SIM_BILLIARDS_MODEL_H_

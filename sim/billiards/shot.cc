@@ -1,0 +1,104 @@
+#include "sim/billiards/shot.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "absl/strings/str_format.h"
+#include "sim/billiards/cloth.h"
+#include "sim/billiards/cue.h"
+#include "sim/core/check.h"
+#include "sim/core/cpu_clock.h"
+
+namespace sportsim::billiards {
+namespace {
+
+Sample TakeSample(const TableState& s) {
+  Sample out;
+  out.t_s = s.t_s;
+  out.r.reserve(s.balls.size());
+  out.state.reserve(s.balls.size());
+  for (const Ball& b : s.balls) {
+    out.r.push_back(b.r.head<2>());
+    out.state.push_back(b.state);
+  }
+  return out;
+}
+
+}  // namespace
+
+absl::Status ValidateShotOptions(const ShotOptions& shot) {
+  if (absl::Status s = CheckFiniteInRange("max_time_s", shot.max_time_s, 0, true, 3600, false);
+      !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = CheckFiniteInRange("sample_interval_s", shot.sample_interval_s, 0, false,
+                                          3600, false);
+      !s.ok()) {
+    return s;
+  }
+  if (shot.max_samples < 1 || shot.max_samples > 10'000'000) {
+    return absl::InvalidArgumentError("max_samples must be in [1, 10000000]");
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOptions& options,
+                                        const TableState& initial, const ShotOptions& shot) {
+  if (absl::Status s = ValidateSolverOptions(options); !s.ok()) return s;
+  if (absl::Status s = ValidateShotOptions(shot); !s.ok()) return s;
+  if (absl::Status s = ValidateLayout(model, initial); !s.ok()) return s;
+  const double cpu0 = ThreadCpuSeconds();
+  ShotResult out;
+  out.final_state = initial;
+  TableState& s = out.final_state;
+  for (size_t i = 0; i < s.balls.size(); ++i) {
+    Ball& b = s.balls[i];
+    b.r.z() = model.radius();
+    b.v.z() = 0.0;
+    const MotionState from = b.state;
+    b.state = Classify(model, b);
+    if (b.state != from) {
+      out.events.push_back({.t_s = s.t_s, .kind = EventKind::kTransition,
+                            .a = static_cast<int>(i), .from = from, .to = b.state,
+                            .va = b.v.head<2>()});
+    }
+  }
+  const double t_start = s.t_s;
+  const double t_stop = t_start + shot.max_time_s;
+  // Chunks end on the step grid: whole numbers of steps per sample, or 1 s without sampling.
+  const double dt = options.dt_s;
+  const double chunk =
+      shot.sample_interval_s > 0 ? std::max(1.0, std::round(shot.sample_interval_s / dt)) * dt
+                                 : std::round(1.0 / dt) * dt;
+  if (shot.sample_interval_s > 0) out.samples.push_back(TakeSample(s));
+  int64_t k = 0;
+  while (!s.AtRest() && s.t_s < t_stop) {
+    ++k;
+    const double t_next = std::min(t_start + static_cast<double>(k) * chunk, t_stop);
+    if (absl::Status st = Advance(model, options, t_next, &s, &out.events); !st.ok()) return st;
+    if (shot.sample_interval_s > 0) {
+      if (static_cast<int64_t>(out.samples.size()) >= shot.max_samples) {
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "the trajectory would exceed %d samples: raise sample_interval_s", shot.max_samples));
+      }
+      out.samples.push_back(TakeSample(s));
+    }
+  }
+  out.at_rest = s.AtRest();
+  out.t_rest_s = t_start;
+  if (out.at_rest) {
+    // The instant the last ball stopped (or fell), not the chunk boundary.
+    for (const Event& e : out.events) {
+      if (e.kind == EventKind::kTransition &&
+          (e.to == MotionState::kStationary || e.to == MotionState::kPocketed)) {
+        out.t_rest_s = std::max(out.t_rest_s, e.t_s);
+      }
+    }
+  } else {
+    out.t_rest_s = s.t_s;
+  }
+  out.cpu_s = ThreadCpuSeconds() - cpu0;
+  return out;
+}
+
+}  // namespace sportsim::billiards
