@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -40,17 +41,49 @@ Commands:
       [--launch-direction-deg DEG] [--wind MPS[,TOWARD_DEG[,log]]] [--temperature-c C]
       [--pressure-pa PA] [--humidity F] [--altitude-m M] [--dt S] [--sample-interval S]
       [--disable drag,lift,spin_decay,wind]
+  shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
+      --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
+      [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]
+      [--b B] [--engine event|stepped] [--integrator euler|semi_implicit_euler|rk4] [--dt S]
+      [--no-ccd] [--disable EFFECT,...] [--enable drag] [--param NAME=VALUE ...]
+      [--cushion-model han|mirror] [--noise X --seed N] [--jitter M --rack-seed N]
+      [--sample-rate HZ] [--max-time S] [--svg FILE]
 Flags may be written --name value or --name=value; dashes and underscores are the same.
 Errors: the gRPC status code name and message on stderr, exit status = the code number
 (64 for usage errors). --helpfull lists every flag.)";
 
-// absl flag names cannot contain '-': accept --qbeta-until for --qbeta_until.
+constexpr std::string_view kRepeatable[] = {"ball", "param"};
+
+std::map<std::string, std::vector<std::string>, std::less<>>& Repeated() {
+  static auto* values = new std::map<std::string, std::vector<std::string>, std::less<>>();
+  return *values;
+}
+
+// absl flag names cannot contain '-': accept --qbeta-until for --qbeta_until. Repeatable flags
+// (--ball ID@X,Y, --param NAME=VALUE) are taken out here, since absl keeps only a flag's last
+// value and splits vectors at commas.
 std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
   std::vector<std::string> out;
   bool flags_done = false;
   for (int i = 0; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--") flags_done = true;
+    if (!flags_done && a.size() > 2 && a[0] == '-' && a[1] == '-') {
+      const size_t eq = a.find('=');
+      const std::string name = a.substr(2, eq == std::string::npos ? std::string::npos : eq - 2);
+      bool repeatable = false;
+      for (std::string_view r : kRepeatable) repeatable |= name == r;
+      if (repeatable) {
+        if (eq != std::string::npos) {
+          Repeated()[name].push_back(a.substr(eq + 1));
+        } else if (i + 1 < argc) {
+          Repeated()[name].push_back(argv[++i]);
+        } else {
+          Repeated()[name].push_back("");
+        }
+        continue;
+      }
+    }
     if (!flags_done && i > 0 && a.size() > 2 && a[0] == '-' && a[1] == '-') {
       const size_t end = a.find('=');
       for (size_t j = 2; j < std::min(end, a.size()); ++j) {
@@ -98,6 +131,12 @@ std::string ToJson(const google::protobuf::Message& message, bool one_line) {
   return out;
 }
 
+const std::vector<std::string>& RepeatedFlagValues(std::string_view name) {
+  static const std::vector<std::string> kNone;
+  auto it = Repeated().find(name);
+  return it == Repeated().end() ? kNone : it->second;
+}
+
 std::string Num(double v) {
   char buf[64];
   const auto r = std::to_chars(buf, buf + sizeof(buf), v);
@@ -128,15 +167,21 @@ int RunInfo(const Context& ctx, const std::vector<std::string>& args) {
             << "  billiards integrators: " << list(c.integrators()) << "\n"
             << "  table presets:         " << list(c.table_presets()) << "\n"
             << "  racks:                 " << list(c.racks()) << "\n"
+            << "  billiards effects:     " << list(c.effects()) << "\n"
             << "  swing integrators:     " << list(c.swing_integrators()) << "\n"
             << "  swing effects:         " << list(c.swing_effects()) << "\n"
             << "  services:              " << list(c.services()) << "\n"
-            << "  swing parameters:\n";
-  for (const v1::ParameterInfo& p : c.swing_parameters()) {
-    std::printf("    %-24s default %-10.6g range [%g, %g] %s  %s\n", p.name().c_str(),
-                p.default_value(), p.min_value(), p.max_value(), p.unit().c_str(),
-                p.description().c_str());
-  }
+            << "  billiards parameters (pool-9ft defaults):\n";
+  const auto print_params = [](const auto& params) {
+    for (const v1::ParameterInfo& p : params) {
+      std::printf("    %-24s default %-10.6g range [%g, %g] %s  %s\n", p.name().c_str(),
+                  p.default_value(), p.min_value(), p.max_value(), p.unit().c_str(),
+                  p.description().c_str());
+    }
+  };
+  print_params(c.parameters());
+  std::cout << "  swing parameters:\n";
+  print_params(c.swing_parameters());
   return 0;
 }
 
@@ -193,5 +238,6 @@ int main(int argc, char** argv) {
   if (command == "health") return RunHealth(ctx, rest);
   if (command == "swing") return RunSwing(ctx, rest);
   if (command == "flight") return RunFlight(ctx, rest);
-  return UsageError("unknown command '" + command + "' (info, health, swing, flight)");
+  if (command == "shot") return RunShot(ctx, rest);
+  return UsageError("unknown command '" + command + "' (info, health, swing, flight, shot)");
 }

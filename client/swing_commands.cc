@@ -25,7 +25,7 @@ ABSL_FLAG(std::optional<double>, qbeta_until, std::nullopt, "When the wrist torq
 ABSL_FLAG(std::optional<double>, shoulder_accel, std::nullopt, "Shoulder acceleration toward the target (m/s^2); default 0.98");
 ABSL_FLAG(std::optional<double>, gamma, std::nullopt, "Arm angle at the top of the backswing (deg); default 135");
 ABSL_FLAG(std::optional<double>, beta0, std::nullopt, "Initial wrist cock (deg); default 120");
-ABSL_FLAG(std::vector<std::string>, disable, {}, "Swing effects to switch off: gravity,shoulder_accel,wrist_torque");
+ABSL_FLAG(std::vector<std::string>, disable, {}, "Effects to switch off (swing: gravity,shoulder_accel,wrist_torque; shot: see info)");
 ABSL_FLAG(int, stride, 0, "Keep every n-th step as a sample (0: automatic)");
 
 namespace sportsim::cli {

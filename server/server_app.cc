@@ -101,6 +101,7 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->host_ = address->host;
   app->services_.push_back(MakeInfoService());
   app->services_.push_back(MakeSwingService());
+  app->services_.push_back(MakeBilliardsService());
 
   grpc::ServerBuilder builder;
   // Without this, gRPC sets SO_REUSEPORT and a second server would share a busy port silently.

@@ -3,10 +3,13 @@
 #include <google/protobuf/stubs/common.h>
 #include <grpcpp/grpcpp.h>
 
+#include "server/billiards_convert.h"
 #include "server/status_util.h"
+#include "sim/billiards/shot.h"
 #include "sim/core/cpu_clock.h"
 #include "server/swing_convert.h"
 #include "sim/swing/swing_simulation.h"
+#include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
@@ -81,6 +84,29 @@ class SwingService final : public v1::Swing::CallbackService {
   }
 };
 
+class BilliardsService final : public v1::Billiards::CallbackService {
+  grpc::ServerUnaryReactor* SimulateShot(grpc::CallbackServerContext* ctx,
+                                         const v1::SimulateShotRequest* request,
+                                         v1::SimulateShotResponse* response) override {
+    auto* reactor = ctx->DefaultReactor();
+    reactor->Finish(ToGrpcStatus(Simulate(*request, response, ctx)));
+    return reactor;
+  }
+
+  static absl::Status Simulate(const v1::SimulateShotRequest& request,
+                               v1::SimulateShotResponse* response,
+                               grpc::CallbackServerContext* ctx) {
+    absl::StatusOr<ShotJob> job = ShotJobFromProto(request);
+    if (!job.ok()) return job.status();
+    job->shot.cancelled = [ctx] { return ctx->IsCancelled(); };
+    absl::StatusOr<billiards::ShotResult> result = billiards::SimulateShot(
+        job->table.model, job->solver, job->table.state, job->shot);
+    if (!result.ok()) return result.status();
+    ShotResultToProto(*job, *result, response);
+    return absl::OkStatus();
+  }
+};
+
 }  // namespace
 
 v1::GetInfoResponse MakeServerInfo() {
@@ -92,6 +118,7 @@ v1::GetInfoResponse MakeServerInfo() {
   info.set_protobuf_version(
       google::protobuf::internal::VersionString(GOOGLE_PROTOBUF_VERSION));
   v1::Capabilities* caps = info.mutable_capabilities();
+  AddBilliardsCapabilities(caps);
   for (swing::SwingIntegrator i : swing::kAllSwingIntegrators) {
     caps->add_swing_integrators(std::string(swing::SwingIntegratorName(i)));
   }
@@ -99,6 +126,7 @@ v1::GetInfoResponse MakeServerInfo() {
   for (v1::ParameterInfo& p : SwingParameterInfo()) *caps->add_swing_parameters() = std::move(p);
   caps->add_services(v1::Server::service_full_name());
   caps->add_services(v1::Swing::service_full_name());
+  caps->add_services(v1::Billiards::service_full_name());
   caps->add_services("grpc.health.v1.Health");
   caps->add_services("grpc.reflection.v1alpha.ServerReflection");
   return info;
@@ -106,5 +134,8 @@ v1::GetInfoResponse MakeServerInfo() {
 
 std::unique_ptr<grpc::Service> MakeInfoService() { return std::make_unique<InfoService>(); }
 std::unique_ptr<grpc::Service> MakeSwingService() { return std::make_unique<SwingService>(); }
+std::unique_ptr<grpc::Service> MakeBilliardsService() {
+  return std::make_unique<BilliardsService>();
+}
 
 }  // namespace sportsim::server

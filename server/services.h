@@ -15,6 +15,7 @@ v1::GetInfoResponse MakeServerInfo();
 
 std::unique_ptr<grpc::Service> MakeInfoService();
 std::unique_ptr<grpc::Service> MakeSwingService();
+std::unique_ptr<grpc::Service> MakeBilliardsService();
 
 }  // namespace sportsim::server
 

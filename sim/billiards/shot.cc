@@ -65,15 +65,19 @@ absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOpt
   }
   const double t_start = s.t_s;
   const double t_stop = t_start + shot.max_time_s;
-  // Chunks end on the step grid: whole numbers of steps per sample, or 1 s without sampling.
+  // Chunks end on the step grid: whole numbers of steps per sample, or 1024 steps without
+  // sampling (where cancellation is polled).
   const double dt = options.dt_s;
-  const double chunk =
-      shot.sample_interval_s > 0 ? std::max(1.0, std::round(shot.sample_interval_s / dt)) * dt
-                                 : std::round(1.0 / dt) * dt;
+  const double chunk = shot.sample_interval_s > 0
+                           ? std::max(1.0, std::round(shot.sample_interval_s / dt)) * dt
+                           : 1024.0 * dt;
   if (shot.sample_interval_s > 0) out.samples.push_back(TakeSample(s));
   int64_t k = 0;
   while (!s.AtRest() && s.t_s < t_stop) {
     ++k;
+    if (shot.cancelled && shot.cancelled()) {
+      return absl::CancelledError(absl::StrFormat("cancelled at t = %.6f s", s.t_s));
+    }
     const double t_next = std::min(t_start + static_cast<double>(k) * chunk, t_stop);
     if (absl::Status st = Advance(model, options, t_next, &s, &out.events); !st.ok()) return st;
     if (shot.sample_interval_s > 0) {

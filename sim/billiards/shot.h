@@ -4,6 +4,7 @@
 #define SPORTSIM_SIM_BILLIARDS_SHOT_H_
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "absl/functional/function_ref.h"
@@ -18,6 +19,8 @@ struct ShotOptions {
   double max_time_s = 600.0;        ///< stop (not at rest) after this much simulated time (s)
   double sample_interval_s = 0.0;   ///< 0: no trajectory; else a sample about this often (s)
   int64_t max_samples = 200000;     ///< cap on the trajectory's length
+  /// Polled every 1024 steps or so; returning true stops the run with Cancelled.
+  std::function<bool()> cancelled;
 };
 
 struct ShotResult {

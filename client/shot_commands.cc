@@ -1,0 +1,212 @@
+// `sportsim shot ...`: fast-forward a cue shot (Billiards/SimulateShot).
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+
+#include "absl/flags/declare.h"
+#include "absl/flags/flag.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_split.h"
+#include "client/cli.h"
+#include "client/table_svg.h"
+#include "sportsim/v1/billiards.grpc.pb.h"
+
+// Shared with the swing and flight commands.
+ABSL_DECLARE_FLAG(std::string, integrator);
+ABSL_DECLARE_FLAG(std::optional<double>, dt);
+ABSL_DECLARE_FLAG(std::vector<std::string>, disable);
+ABSL_DECLARE_FLAG(std::optional<double>, ball_speed);
+
+ABSL_FLAG(std::string, table, "pool-9ft", "Table preset: pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded");
+ABSL_FLAG(std::string, rack, "", "Rack: empty|8ball|9ball|snooker|three-cushion|chapter19 (default: the preset's game)");
+ABSL_FLAG(double, jitter, 0.0, "Seeded random gaps between racked balls, up to this (m)");
+ABSL_FLAG(uint64_t, rack_seed, 0, "Seed of the rack jitter");
+ABSL_FLAG(std::optional<double>, speed, std::nullopt, "Cue speed V0 (m/s)");
+ABSL_FLAG(double, phi, 0.0, "Heading (deg), counter-clockwise from +x");
+ABSL_FLAG(double, theta, 0.0, "Cue elevation (deg)");
+ABSL_FLAG(double, a, 0.0, "Side offset of the tip, fraction of R (> 0: right of centre)");
+ABSL_FLAG(double, b, 0.0, "Vertical offset of the tip, fraction of R (> 0: above centre)");
+ABSL_FLAG(double, noise, 0.0, "Strike noise (1 = FastFiz's sigmas)");
+ABSL_FLAG(uint64_t, seed, 0, "Seed of the strike noise");
+ABSL_FLAG(std::string, strike_ball, "cue", "Ball the cue strikes");
+ABSL_FLAG(std::string, engine, "", "Billiards engine: event|stepped (default: the server's)");
+ABSL_FLAG(bool, no_ccd, false, "Stepped engine without continuous collision detection");
+ABSL_FLAG(std::vector<std::string>, enable, {}, "Effects off by default to switch on: drag");
+ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mirror");
+ABSL_FLAG(std::optional<double>, sample_rate, std::nullopt, "Trajectory samples per second");
+ABSL_FLAG(std::optional<double>, max_time, std::nullopt, "Stop after this much simulated time (s)");
+ABSL_FLAG(std::string, svg, "", "Write a top view of the shot to this SVG file");
+
+namespace sportsim::cli {
+namespace {
+
+std::optional<std::string> BuildSetup(v1::TableSetup* t) {
+  t->set_preset(absl::GetFlag(FLAGS_table));
+  t->set_rack(absl::GetFlag(FLAGS_rack));
+  t->set_rack_jitter_m(absl::GetFlag(FLAGS_jitter));
+  t->set_rack_seed(absl::GetFlag(FLAGS_rack_seed));
+  for (const std::string& spec : RepeatedFlagValues("ball")) {
+    // ID@X,Y
+    const size_t at = spec.find('@');
+    std::vector<std::string> xy;
+    if (at != std::string::npos) xy = absl::StrSplit(spec.substr(at + 1), ',');
+    double x = 0, y = 0;
+    if (at == std::string::npos || at == 0 || xy.size() != 2 || !absl::SimpleAtod(xy[0], &x) ||
+        !absl::SimpleAtod(xy[1], &y)) {
+      return "--ball must be ID@X,Y (metres), got '" + spec + "'";
+    }
+    v1::BallPlacement* b = t->add_balls();
+    b->set_id(spec.substr(0, at));
+    b->set_x_m(x);
+    b->set_y_m(y);
+  }
+  for (const std::string& spec : RepeatedFlagValues("param")) {
+    const size_t eq = spec.find('=');
+    double v = 0;
+    if (eq == std::string::npos || eq == 0 || !absl::SimpleAtod(spec.substr(eq + 1), &v)) {
+      return "--param must be NAME=VALUE, got '" + spec + "'";
+    }
+    (*t->mutable_params())[spec.substr(0, eq)] = v;
+  }
+  const std::string cm = absl::GetFlag(FLAGS_cushion_model);
+  if (cm == "mirror") t->set_cushion_model(v1::CUSHION_MODEL_MIRROR);
+  else if (cm == "han") t->set_cushion_model(v1::CUSHION_MODEL_HAN);
+  else if (!cm.empty()) return "--cushion-model must be han or mirror, got '" + cm + "'";
+  return std::nullopt;
+}
+
+std::optional<std::string> BuildSolver(v1::SolverConfig* s) {
+  const std::string engine = absl::GetFlag(FLAGS_engine);
+  if (engine == "stepped") s->set_engine(v1::ENGINE_STEPPED);
+  else if (engine == "event") s->set_engine(v1::ENGINE_EVENT);
+  else if (!engine.empty()) return "--engine must be event or stepped, got '" + engine + "'";
+  const std::string integ = absl::GetFlag(FLAGS_integrator);
+  if (integ == "rk4") s->set_integrator(v1::BILLIARDS_INTEGRATOR_RK4);
+  else if (integ == "euler") s->set_integrator(v1::BILLIARDS_INTEGRATOR_EULER);
+  else if (integ == "semi_implicit_euler") s->set_integrator(v1::BILLIARDS_INTEGRATOR_SEMI_IMPLICIT_EULER);
+  else return "--integrator for billiards must be euler, semi_implicit_euler or rk4, got '" + integ + "'";
+  if (auto dt = absl::GetFlag(FLAGS_dt)) s->set_dt_s(*dt);
+  s->set_no_ccd(absl::GetFlag(FLAGS_no_ccd));
+  for (const std::string& e : absl::GetFlag(FLAGS_disable)) s->add_disable(e);
+  for (const std::string& e : absl::GetFlag(FLAGS_enable)) s->add_enable(e);
+  return std::nullopt;
+}
+
+std::optional<std::string> BuildStrike(v1::CueStrike* c) {
+  const auto speed = absl::GetFlag(FLAGS_speed);
+  const auto ball_speed = absl::GetFlag(FLAGS_ball_speed);
+  if (speed.has_value() == ball_speed.has_value()) {
+    return "give exactly one of --speed (cue speed, m/s) and --ball-speed (m/s)";
+  }
+  if (speed) c->set_speed_mps(*speed);
+  if (ball_speed) c->set_ball_speed_mps(*ball_speed);
+  c->set_ball(absl::GetFlag(FLAGS_strike_ball));
+  c->set_phi_deg(absl::GetFlag(FLAGS_phi));
+  c->set_theta_deg(absl::GetFlag(FLAGS_theta));
+  c->set_a(absl::GetFlag(FLAGS_a));
+  c->set_b(absl::GetFlag(FLAGS_b));
+  c->set_noise(absl::GetFlag(FLAGS_noise));
+  c->set_seed(absl::GetFlag(FLAGS_seed));
+  return std::nullopt;
+}
+
+int CountKind(const v1::SimulateShotResponse& r, v1::EventKind k) {
+  int n = 0;
+  for (const v1::TableEvent& e : r.events()) n += e.kind() == k;
+  return n;
+}
+
+void PrintText(const v1::SimulateShotResponse& r) {
+  std::printf("%s after %.3f s; %d ball-ball, %d cushion, %d pocket events (%d in all); "
+              "%s engine, %s, dt %g s; %.3f ms CPU\n",
+              r.at_rest() ? "at rest" : "still moving", r.t_rest_s(),
+              CountKind(r, v1::ball_ball), CountKind(r, v1::ball_cushion),
+              CountKind(r, v1::ball_pocket), r.events_size(), r.engine().c_str(),
+              r.integrator().c_str(), r.dt_s(), r.cpu_s() * 1e3);
+  if (r.has_strike()) {
+    std::printf("strike: cue %.3f m/s -> ball %.3f m/s, phi %.2f deg, theta %.2f deg, a %.3f, "
+                "b %.3f, squirt %.2f deg\n",
+                r.strike().cue_speed_mps(), r.strike().ball_speed_mps(), r.strike().phi_deg(),
+                r.strike().theta_deg(), r.strike().a(), r.strike().b(), r.strike().squirt_deg());
+  }
+  std::printf("%-8s %9s %9s  %s\n", "ball", "x_m", "y_m", "state");
+  for (const v1::BallState& b : r.balls()) {
+    std::printf("%-8s %9.4f %9.4f  %s%s%s\n", b.id().c_str(), b.x_m(), b.y_m(),
+                v1::MotionState_Name(b.state()).c_str(), b.pocket().empty() ? "" : " in ",
+                b.pocket().c_str());
+  }
+  int shown = 0;
+  for (const v1::TableEvent& e : r.events()) {
+    if (e.kind() == v1::transition) continue;
+    if (++shown > 40) {
+      std::printf("... (--format json lists every event)\n");
+      break;
+    }
+    std::string who;
+    for (const std::string& id : e.balls()) who += (who.empty() ? "" : "-") + id;
+    std::printf("%10.6f s  %-12s %-10s %s\n", e.t_s(), v1::EventKind_Name(e.kind()).c_str(),
+                who.c_str(), e.has_cushion() ? e.cushion().c_str() : e.pocket().c_str());
+  }
+}
+
+void PrintCsv(const v1::SimulateShotResponse& r) {
+  std::cout << "t_s,id,x_m,y_m,state\n";
+  for (const v1::ShotSample& s : r.samples()) {
+    for (int i = 0; i < s.x_m_size(); ++i) {
+      std::cout << Num(s.t_s()) << ',' << r.balls(i).id() << ',' << Num(s.x_m(i)) << ','
+                << Num(s.y_m(i)) << ',' << v1::MotionState_Name(s.state(i)) << '\n';
+    }
+  }
+}
+
+int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
+  if (!args.empty()) return UsageError("shot simulate takes flags only, got '" + args[0] + "'");
+  v1::SimulateShotRequest request;
+  if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
+  if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
+  if (auto bad = BuildStrike(request.mutable_strike())) return UsageError(*bad);
+  const std::string svg = absl::GetFlag(FLAGS_svg);
+  // Drawings and CSV need a trajectory: 240 samples/s unless told otherwise.
+  const bool want_samples = !svg.empty() || ctx.format == Format::kCsv;
+  if (auto rate = absl::GetFlag(FLAGS_sample_rate)) request.set_sample_rate_hz(*rate);
+  else if (want_samples) request.set_sample_rate_hz(240);
+  if (auto t = absl::GetFlag(FLAGS_max_time)) request.set_max_time_s(*t);
+  request.set_include_geometry(!svg.empty());
+
+  auto stub = v1::Billiards::NewStub(ctx.channel);
+  v1::SimulateShotResponse response;
+  const grpc::Status status = stub->SimulateShot(ctx.NewCall().get(), request, &response);
+  if (!status.ok()) return ReportRpcError(status);
+  if (!svg.empty()) {
+    TableDrawing drawing{.geometry = response.geometry(), .paths = PathsFromShot(response)};
+    drawing.events.assign(response.events().begin(), response.events().end());
+    drawing.title = absl::StrFormat(
+        "%s, %s: %s after %.2f s (%d ball-ball, %d cushion, %d pocketed)",
+        absl::GetFlag(FLAGS_table), request.table().rack().empty() ? "default rack" : request.table().rack(),
+        response.at_rest() ? "at rest" : "still moving", response.t_rest_s(),
+        CountKind(response, v1::ball_ball), CountKind(response, v1::ball_cushion),
+        CountKind(response, v1::ball_pocket));
+    std::ofstream out(svg);
+    out << TableSvg(drawing);
+    if (!out) return UsageError("cannot write --svg file '" + svg + "'");
+  }
+  return PrintResponse(ctx, response, PrintCsv, PrintText);
+}
+
+}  // namespace
+
+int RunShot(const Context& ctx, const std::vector<std::string>& args) {
+  if (args.empty()) return UsageError("shot needs a subcommand: simulate");
+  const std::vector<std::string> rest(args.begin() + 1, args.end());
+  if (args[0] == "simulate") return RunSimulate(ctx, rest);
+  return UsageError("unknown shot subcommand '" + args[0] + "' (simulate)");
+}
+
+}  // namespace sportsim::cli
