@@ -15,11 +15,12 @@ bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b) 
   n /= dist;
   const Eigen::Vector3d v_rel = a->v - b->v;
   const double approach = v_rel.dot(n);
-  if (approach <= 0.0) return false;
+  if (approach <= kMinApproachSpeed) return false;
   const PhysicsParams& p = model.params();
   const double m = model.mass();
   const double radius = model.radius();
-  const double jn = (1.0 + p.e_ball) * 0.5 * m * approach;
+  const double e = approach < kRestingContactSpeed ? 0.0 : p.e_ball;
+  const double jn = (1.0 + e) * 0.5 * m * approach;
   Eigen::Vector3d impulse_a = -jn * n;  // on ball a; ball b gets the opposite
   Eigen::Vector3d dw = Eigen::Vector3d::Zero();
   if ((disabled & kEffectBallFriction) == 0) {
@@ -27,7 +28,7 @@ bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b) 
     const Eigen::Vector3d ut = u - u.dot(n) * n;
     const double slip = ut.norm();
     if (slip > 0.0) {
-      const double mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * v_rel.norm());
+      const double mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * slip);
       const double pt = std::min(mu * jn, m * slip / 7.0);
       const Eigen::Vector3d friction = -(pt / slip) * ut;
       impulse_a += friction;
@@ -49,10 +50,10 @@ bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b) 
 bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball* ball) {
   const Eigen::Vector3d nh(normal.x(), normal.y(), 0.0);
   const double vn = ball->v.dot(nh);
-  if (vn >= 0.0) return false;
+  if (vn >= -kMinApproachSpeed) return false;
   const PhysicsParams& p = model.params();
   if (p.cushion_model == CushionModel::kMirror) {
-    ball->v -= 2.0 * vn * nh;
+    ball->v -= (-vn < kRestingContactSpeed ? 1.0 : 2.0) * vn * nh;
   } else {
     // The nose touches the ball at angle theta_a above its equator: contact point
     // r_c = R (-cos nh + sin z^), contact normal into the ball n = cos nh - sin z^.
@@ -62,7 +63,8 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
     const double c = std::sqrt(1.0 - s * s);
     const Eigen::Vector3d rc = radius * (-c * nh + s * Eigen::Vector3d::UnitZ());
     const Eigen::Vector3d n = c * nh - s * Eigen::Vector3d::UnitZ();
-    const double jn = -(1.0 + p.e_cushion) * m * ball->v.dot(n);
+    const double e = -vn < kRestingContactSpeed ? 0.0 : p.e_cushion;
+    const double jn = -(1.0 + e) * m * ball->v.dot(n);
     // Slip of the contact point across the nose; Coulomb friction capped at sticking, where
     // 7/(2m) is a free sphere's inverse effective mass for a tangential impulse at its surface.
     const Eigen::Vector3d vc = ball->v + ball->w.cross(rc);

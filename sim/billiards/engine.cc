@@ -137,6 +137,14 @@ class SteppedEngine {
   }
 
   absl::Status Run(double t_end) {
+    // A ball given a velocity from outside (a strike, a tool) starts moving now.
+    for (size_t i = 0; i < n_; ++i) {
+      Ball& b = s_->balls[i];
+      if (b.state != MotionState::kStationary && b.state != MotionState::kSpinning) continue;
+      const MotionState from = b.state;
+      b.state = Classify(model_, b);
+      RecordTransition(static_cast<int>(i), from);
+    }
     const double dt = o_.dt_s;
     while (s_->t_s < t_end) {
       if (s_->AtRest()) {
@@ -234,8 +242,12 @@ class SteppedEngine {
         ApplyTransition(model_, next_[i].kind, &b);
         RecordTransition(static_cast<int>(i), from);
       }
-      // 5. Without CCD: contacts only where balls overlap at the end of the sub-step.
-      if (!o_.ccd) DiscreteContacts();
+      // 5. Resting contacts with CCD; without it, every contact is found by overlap here.
+      if (o_.ccd) {
+        RestingContacts();
+      } else {
+        DiscreteContacts();
+      }
       LeaveTable();
       if (absl::Status st = CheckFinite(); !st.ok()) return st;
     }
@@ -285,7 +297,10 @@ class SteppedEngine {
         const double g0 = rel0.norm() - 2.0 * radius;
         Contact c{.kind = ContactKind::kBall, .a = static_cast<int>(i), .b = static_cast<int>(j)};
         if (g0 <= kTouch) {
-          if ((bi.v - bj.v).head<2>().dot(rel0) > 0.0) {
+          // Touching: a real collision now, or a resting contact (slower than
+          // kRestingContactSpeed, or not approaching) that RestingContacts() keeps at the end of
+          // the sub-step.
+          if ((bi.v - bj.v).head<2>().dot(rel0) >= kRestingContactSpeed * rel0.norm()) {
             c.tau = 0.0;
             consider(c);
           }
@@ -312,11 +327,11 @@ class SteppedEngine {
           Contact c{.kind = ContactKind::kCushion, .a = static_cast<int>(i),
                     .other = static_cast<int>(k)};
           if (g0 <= kTouch) {
-            if (bi.v.head<2>().dot(p0i - near0) < 0.0) {
+            if (bi.v.head<2>().dot(p0i - near0) <= -kRestingContactSpeed * (p0i - near0).norm()) {
               c.tau = 0.0;
               consider(c);
             }
-            continue;
+            continue;  // frozen to the cushion: a resting contact
           }
           const auto g = [&](double t) {
             const Eigen::Vector2d p = PosAt(static_cast<int>(i), t);
@@ -393,6 +408,61 @@ class SteppedEngine {
     b.pocket = pocket;
     Record({.t_s = s_->t_s, .kind = EventKind::kBallPocket, .a = i, .other = pocket});
     RecordTransition(i, from);
+  }
+
+  // Resting contacts (touching, approaching slower than kRestingContactSpeed: a ball pushed
+  // into a frozen group or a cushion by its spin) are kept at sub-step resolution instead of as
+  // an endless cascade of micro-collisions: overlap is projected away (only moving balls move)
+  // and an approaching pair gets a plastic impulse. Not events; the transitions they cause are.
+  void RestingContacts() {
+    auto& balls = s_->balls;
+    const double radius = model_.radius();
+    const bool cushions = model_.spec().bounded && (o_.disabled & kEffectCushions) == 0;
+    for (int pass = 0; pass < 16; ++pass) {  // Gauss-Seidel: a cluster settles in a few passes
+      bool any = false;
+      for (size_t i = 0; i < n_; ++i) {
+        if (balls[i].state == MotionState::kPocketed) continue;
+        for (size_t j = i + 1; j < n_; ++j) {
+          if (balls[j].state == MotionState::kPocketed) continue;
+          const bool ti = Translating(balls[i]), tj = Translating(balls[j]);
+          if (!ti && !tj) continue;
+          Eigen::Vector3d d = balls[j].r - balls[i].r;
+          d.z() = 0.0;
+          const double dist = d.norm();
+          const double overlap = 2.0 * radius - dist;
+          if (overlap <= 1e-12 || dist == 0.0) continue;
+          const Eigen::Vector3d n = d / dist;
+          if (ti && tj) {
+            balls[i].r -= 0.5 * overlap * n;
+            balls[j].r += 0.5 * overlap * n;
+          } else if (ti) {
+            balls[i].r -= overlap * n;
+          } else {
+            balls[j].r += overlap * n;
+          }
+          any = true;
+          const MotionState fi = balls[i].state, fj = balls[j].state;
+          if (CollideBalls(model_, o_.disabled, &balls[i], &balls[j])) {
+            RecordTransition(static_cast<int>(i), fi);
+            RecordTransition(static_cast<int>(j), fj);
+          }
+        }
+        if (!cushions || !Translating(balls[i])) continue;
+        const double dc = model_.cushion_contact_distance();
+        for (const CushionSegment& seg : model_.spec().cushions) {
+          const Eigen::Vector2d p = balls[i].r.head<2>();
+          const Eigen::Vector2d off = p - ClosestOnSegment(seg.a, seg.b, p);
+          const double dist = off.norm();
+          if (dist >= dc - 1e-12 || dist == 0.0) continue;
+          const Eigen::Vector2d n = off / dist;
+          balls[i].r.head<2>() += (dc - dist) * n;
+          any = true;
+          const MotionState from = balls[i].state;
+          if (CollideCushion(model_, n, &balls[i])) RecordTransition(static_cast<int>(i), from);
+        }
+      }
+      if (!any) break;
+    }
   }
 
   // Contacts by overlap at the end of a sub-step (CCD off): what a naive stepper does.

@@ -49,7 +49,8 @@ absl::Status ValidateSolverOptions(const SolverOptions& options);
 /// Advances `state` to `t_end_s` (>= state->t_s), appending what happens to `events` in time
 /// order. The stepped engine steps on the grid t = k dt_s (a t_end off the grid ends with a
 /// partial step), so chunked calls that end on grid points give bit-identical results. A table
-/// at rest costs nothing. Errors: InvalidArgument for bad options, ResourceExhausted at the
+/// at rest costs nothing. A stationary or spinning ball that has been given a velocity starts
+/// moving (its state is re-derived, with a transition event). Errors: InvalidArgument for bad options, ResourceExhausted at the
 /// event cap, Internal if the state turns non-finite (with the time).
 absl::Status Advance(const TableModel& model, const SolverOptions& options, double t_end_s,
                      TableState* state, std::vector<Event>* events);

@@ -23,7 +23,7 @@ constexpr std::array<ParamInfo, 19> kParams = {{
     {"mu_roll", "", "rolling resistance coefficient mu_r", &PhysicsParams::mu_roll, 0, 0.5},
     {"spin_decel_rps2", "rad/s^2", "spin-down rate of omega_z", &PhysicsParams::spin_decel_rps2, 0, 1000},
     {"e_ball", "", "ball-ball restitution e_b", &PhysicsParams::e_ball, 0, 1},
-    {"mu_ball_a", "", "ball-ball friction mu = a + b exp(-c v_rel): a", &PhysicsParams::mu_ball_a, 0, 1},
+    {"mu_ball_a", "", "ball-ball friction mu = a + b exp(-c u_slip): a", &PhysicsParams::mu_ball_a, 0, 1},
     {"mu_ball_b", "", "ball-ball friction: b", &PhysicsParams::mu_ball_b, 0, 1},
     {"mu_ball_c_spm", "s/m", "ball-ball friction: c", &PhysicsParams::mu_ball_c_spm, 0, 100},
     {"e_cushion", "", "ball-cushion restitution e_c", &PhysicsParams::e_cushion, 0, 1},

@@ -69,7 +69,8 @@ struct PhysicsParams {
   double mu_roll = 0.01;               ///< rolling resistance: dv/dt = -mu_r g v^ while rolling
   double spin_decel_rps2 = 10.0;       ///< spin-down: d(omega_z)/dt = -this sgn(omega_z) (rad/s^2)
   double e_ball = 0.95;                ///< ball-ball restitution e_b
-  double mu_ball_a = 0.00995;          ///< ball-ball friction mu = a + b exp(-c |v_rel|) (TP A-14)
+  double mu_ball_a = 0.00995;          ///< ball-ball friction mu = a + b exp(-c |u_t|) (TP A-14),
+                                       ///< u_t the sliding speed of the surfaces at the contact
   double mu_ball_b = 0.108;            ///< (see mu_ball_a)
   double mu_ball_c_spm = 1.088;        ///< c (s/m) (see mu_ball_a)
   double e_cushion = 0.85;             ///< ball-cushion restitution e_c (along the contact normal)
