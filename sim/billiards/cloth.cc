@@ -1,6 +1,7 @@
 #include "sim/billiards/cloth.h"
 
 #include <cmath>
+#include <limits>
 
 namespace sportsim::billiards {
 namespace {
@@ -80,32 +81,46 @@ Rates ClothRates(const TableModel& model, uint32_t disabled, MotionState state,
   return r;
 }
 
+double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
+                  TransitionKind kind) {
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  const Rates rates = ClothRates(model, disabled, ball.state, ball.v, ball.w);
+  // Each quantity falls linearly at its current rate; time to reach zero.
+  switch (kind) {
+    case TransitionKind::kSlideEnd: {
+      if (ball.state != MotionState::kSliding) return kNever;
+      const Eigen::Vector3d u = Slip(ball.v, ball.w, model.radius());
+      const double closing = -u.dot(Slip(rates.dv, rates.dw, model.radius()));
+      return closing > 0 ? u.squaredNorm() / closing : kNever;
+    }
+    case TransitionKind::kRollStop: {
+      if (ball.state != MotionState::kRolling) return kNever;
+      const Eigen::Vector2d vh = ball.v.head<2>();
+      const double closing = -vh.dot(rates.dv.head<2>());
+      return closing > 0 ? vh.squaredNorm() / closing : kNever;
+    }
+    case TransitionKind::kSpinStop: {
+      if (ball.state != MotionState::kSliding && ball.state != MotionState::kRolling &&
+          ball.state != MotionState::kSpinning) {
+        return kNever;
+      }
+      const double closing = -ball.w.z() * rates.dw.z();
+      return closing > 0 && ball.w.z() != 0 ? ball.w.z() * ball.w.z() / closing : kNever;
+    }
+    case TransitionKind::kNone:
+      break;
+  }
+  return kNever;
+}
+
 NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball) {
   NextTransition next;
-  const auto consider = [&](double dt, TransitionKind kind) {
+  for (TransitionKind kind :
+       {TransitionKind::kSlideEnd, TransitionKind::kRollStop, TransitionKind::kSpinStop}) {
+    const double dt = TimeToZero(model, disabled, ball, kind);
     if (dt < next.dt_s) {
       next.dt_s = dt;
       next.kind = kind;
-    }
-  };
-  const Rates rates = ClothRates(model, disabled, ball.state, ball.v, ball.w);
-  const double radius = model.radius();
-  // Each quantity falls linearly at its current rate; time to reach zero.
-  if (ball.state == MotionState::kSliding) {
-    const Eigen::Vector3d u = Slip(ball.v, ball.w, radius);
-    const Eigen::Vector3d du = Slip(rates.dv, rates.dw, radius);
-    const double closing = -u.dot(du);
-    if (closing > 0) consider(u.squaredNorm() / closing, TransitionKind::kSlideEnd);
-  } else if (ball.state == MotionState::kRolling) {
-    const Eigen::Vector2d vh = ball.v.head<2>();
-    const double closing = -vh.dot(rates.dv.head<2>());
-    if (closing > 0) consider(vh.squaredNorm() / closing, TransitionKind::kRollStop);
-  }
-  if (ball.state == MotionState::kSliding || ball.state == MotionState::kRolling ||
-      ball.state == MotionState::kSpinning) {
-    const double closing = -ball.w.z() * rates.dw.z();
-    if (closing > 0 && ball.w.z() != 0) {
-      consider(ball.w.z() * ball.w.z() / closing, TransitionKind::kSpinStop);
     }
   }
   return next;

@@ -52,6 +52,12 @@ struct NextTransition {
 /// are then constant in every state), an estimate with drag (the engine re-checks).
 NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball);
 
+/// Time until one quantity (slip, speed or w_z, by `kind`) reaches zero at its current rate;
+/// infinity when it is not falling. With drag the engine uses it to re-check a predicted
+/// transition before snapping.
+double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
+                  TransitionKind kind);
+
 /// Snaps a ball whose transition is due: a sliding ball becomes rolling with the velocity that
 /// conserves its angular momentum about the contact point (v - 2/7 u), a rolling ball stops, a
 /// vanishing w_z becomes zero. Then sets the state from Classify.

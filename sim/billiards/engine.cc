@@ -235,8 +235,7 @@ class SteppedEngine {
         if ((o_.disabled & kEffectDrag) == 0) {
           // With drag the predicted time is an estimate: snap only when the quantity has
           // (nearly) reached zero, else predict again.
-          const NextTransition again = TimeToTransition(model_, o_.disabled, b);
-          if (again.kind == next_[i].kind && again.dt_s > 1e-9) continue;
+          if (TimeToZero(model_, o_.disabled, b, next_[i].kind) > 1e-9) continue;
         }
         const MotionState from = b.state;
         ApplyTransition(model_, next_[i].kind, &b);
