@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <string_view>
 
 #include "absl/strings/str_format.h"
 
@@ -57,6 +58,22 @@ bool PathAt(const BallPath& p, double t, double* x, double* y) {
   *x = p.x_m[i - 1] + f * (p.x_m[i] - p.x_m[i - 1]);
   *y = p.y_m[i - 1] + f * (p.y_m[i] - p.y_m[i - 1]);
   return true;
+}
+
+// Text for SVG: ids and titles come from users.
+std::string Escape(std::string_view text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -116,7 +133,8 @@ std::string TableSvg(const TableDrawing& d) {
       "viewBox=\"0 0 %.0f %.0f\" font-family=\"sans-serif\">\n",
       width_px, height_px + top + 30, width_px, height_px + top + 30);
   absl::StrAppendFormat(&svg, "<rect width=\"100%%\" height=\"100%%\" fill=\"#ffffff\"/>\n");
-  absl::StrAppendFormat(&svg, "<text x=\"10\" y=\"26\" font-size=\"18\">%s</text>\n", d.title);
+  absl::StrAppendFormat(&svg, "<text x=\"10\" y=\"26\" font-size=\"18\">%s</text>\n",
+                        Escape(d.title));
   if (g.bounded()) {
     // Wooden rails, cloth inside the cushion noses, cushions, pockets.
     absl::StrAppendFormat(&svg,
@@ -199,7 +217,7 @@ std::string TableSvg(const TableDrawing& d) {
     absl::StrAppendFormat(&svg,
                           "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" fill=\"#ffffff\" "
                           "stroke=\"#000000\" stroke-width=\"0.4\">%s</text>\n",
-                          x + ball_px + 2, y - ball_px - 2, p.id);
+                          x + ball_px + 2, y - ball_px - 2, Escape(p.id));
   }
   absl::StrAppendFormat(&svg,
                         "<text x=\"10\" y=\"%.0f\" font-size=\"13\">paths: solid lines (stripes "

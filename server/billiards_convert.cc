@@ -372,7 +372,7 @@ void AddBilliardsCapabilities(v1::Capabilities* caps) {
   for (std::string_view p : b::TablePresetNames()) caps->add_table_presets(std::string(p));
   for (std::string_view r : b::RackNames()) caps->add_racks(std::string(r));
   for (std::string_view e : b::EffectNames()) caps->add_effects(std::string(e));
-  const b::PhysicsParams defaults;
+  const b::PhysicsParams defaults = b::MakeTablePreset("pool-9ft")->params;
   for (const b::ParamInfo& p : b::ParamInfos()) {
     v1::ParameterInfo* info = caps->add_parameters();
     info->set_name(std::string(p.name));

@@ -578,10 +578,10 @@ absl::Status ValidateSolverOptions(const SolverOptions& o) {
   if (o.engine == Engine::kEvent) {
     if ((o.disabled & kEffectDrag) == 0) {
       return absl::InvalidArgumentError(
-          "the event engine cannot model air drag (it has no closed form): use engine stepped "
-          "or disable drag");
+          "engine: the event engine cannot model air drag (it has no closed form): use engine "
+          "stepped or disable drag");
     }
-    return absl::UnimplementedError("the event engine is not built yet: use engine stepped");
+    return absl::UnimplementedError("engine: the event engine is not built yet: use stepped");
   }
   return absl::OkStatus();
 }

@@ -83,7 +83,8 @@ absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOpt
     if (shot.sample_interval_s > 0) {
       if (static_cast<int64_t>(out.samples.size()) >= shot.max_samples) {
         return absl::ResourceExhaustedError(absl::StrFormat(
-            "the trajectory would exceed %d samples: raise sample_interval_s", shot.max_samples));
+            "the trajectory would exceed %d samples: sample less often (sample_interval_s, "
+            "sample_rate_hz on the wire)", shot.max_samples));
       }
       out.samples.push_back(TakeSample(s));
     }

@@ -8,7 +8,9 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import unittest
+import xml.etree.ElementTree as ET
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "support"))
 from server_proc import ServerProcess  # noqa: E402
@@ -21,6 +23,14 @@ CLI = os.path.join(BIN, "sportsim")
 def cli(address, *args):
     return subprocess.run([CLI, "--server", address, *args], capture_output=True, text=True,
                           timeout=60)
+
+
+# A straight 2 m/s full-ball shot on an otherwise empty 9 ft table: cue at (-0.5, 0), 1 at (0, 0).
+STRAIGHT_SHOT = ("shot", "simulate", "--table", "pool-9ft", "--rack", "empty", "--ball",
+                 "cue@-0.5,0", "--ball", "1@0,0", "--ball-speed", "2")
+MOTION_STATES = {"stationary", "spinning", "sliding", "rolling", "airborne", "pocketed"}
+EVENT_KINDS = {"ball_ball", "ball_cushion", "ball_pocket", "transition"}
+SVG_NS = "{http://www.w3.org/2000/svg}"
 
 
 class CliAgainstServer(unittest.TestCase):
@@ -100,6 +110,129 @@ class CliAgainstServer(unittest.TestCase):
         r = cli(self.server.address, "flight", "simulate", "--ball-speed", "50")
         self.assertEqual(r.returncode, 64)
         self.assertIn("needs --ball-speed, --launch-deg and --spin-rpm", r.stderr)
+
+    def test_info_lists_billiards(self):
+        r = cli(self.server.address, "info", "--format", "json")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        caps = json.loads(r.stdout)["capabilities"]
+        self.assertIn("stepped", caps["engines"])
+        self.assertIn("pool-9ft", caps["table_presets"])
+        self.assertIn("chapter19", caps["racks"])
+        self.assertIn("squirt", caps["effects"])
+        names = {p["name"] for p in caps["parameters"]}
+        for name in ("gravity_mps2", "mu_slide", "mu_roll", "spin_decel_rps2", "e_ball",
+                     "e_cushion", "f_cushion", "ball_radius_m", "ball_mass_kg", "cue_mass_kg"):
+            self.assertIn(name, names)
+        self.assertIn("sportsim.v1.Billiards", caps["services"])
+
+    def test_shot_simulate_json_contract(self):
+        r = cli(self.server.address, "--format", "json", *STRAIGHT_SHOT)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        out = json.loads(r.stdout)
+        for key in ("t_rest_s", "balls", "events", "cpu_s"):
+            self.assertIn(key, out)
+        self.assertGreater(out["t_rest_s"], 0)
+        self.assertIsInstance(out["cpu_s"], (int, float))
+        self.assertGreaterEqual(out["cpu_s"], 0)
+        self.assertEqual([b["id"] for b in out["balls"]], ["cue", "1"])
+        for b in out["balls"]:
+            for key in ("id", "x_m", "y_m", "state"):
+                self.assertIn(key, b)
+            self.assertIn(b["state"], MOTION_STATES)
+            self.assertEqual(b["state"], "stationary")  # every ball at rest at the end
+        events = out["events"]
+        self.assertTrue(events)
+        times = [e["t_s"] for e in events]
+        self.assertEqual(times, sorted(times))  # in time order
+        for e in events:
+            for key in ("t_s", "kind", "balls"):
+                self.assertIn(key, e)
+            self.assertIn(e["kind"], EVENT_KINDS)
+            self.assertTrue(e["balls"])
+            if e["kind"] == "transition":
+                self.assertIn(e["from"], MOTION_STATES)
+                self.assertIn(e["to"], MOTION_STATES)
+                self.assertNotEqual(e["from"], e["to"])
+        hits = [e for e in events if e["kind"] == "ball_ball"]
+        self.assertTrue(hits)
+        first = hits[0]
+        self.assertEqual(first["balls"], ["cue", "1"])
+        self.assertEqual(len(first["after"]), 2)
+        for a in first["after"]:
+            for key in ("id", "vx_mps", "vy_mps"):
+                self.assertIn(key, a)
+        after = {a["id"]: a for a in first["after"]}
+        self.assertEqual(set(after), {"cue", "1"})
+        # A straight full-ball hit at e_ball = 0.95: ball 1 takes almost all the speed along +x,
+        # the cue ball keeps (1 - e) / 2 of it, nothing goes sideways.
+        self.assertGreater(after["1"]["vx_mps"], 1.0)
+        self.assertLess(abs(after["cue"]["vx_mps"]), 0.1 * after["1"]["vx_mps"])
+        self.assertAlmostEqual(after["1"]["vy_mps"], 0.0, places=9)
+        self.assertAlmostEqual(after["cue"]["vy_mps"], 0.0, places=9)
+        self.assertGreater(out["balls"][1]["x_m"], 0)  # ball 1 ended up on the +x side
+
+    def test_shot_simulate_svg(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "shot.svg")
+            r = cli(self.server.address, *STRAIGHT_SHOT, "--svg", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            root = ET.parse(path).getroot()
+        self.assertEqual(root.tag, SVG_NS + "svg")
+        self.assertGreaterEqual(len(root.findall(".//" + SVG_NS + "polyline")), 1)
+
+    def test_shot_simulate_svg_escapes_ball_ids(self):
+        # Regression: ball ids (any 1-32 characters) once went into <text> unescaped, so an id
+        # like "a&b<c" made the --svg file malformed XML.
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "shot.svg")
+            r = cli(self.server.address, "shot", "simulate", "--table", "pool-9ft", "--rack",
+                    "empty", "--ball", "cue@-0.5,0", "--ball", "a&b<c@0,0", "--ball-speed", "2",
+                    "--svg", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            root = ET.parse(path).getroot()
+        self.assertEqual(root.tag, SVG_NS + "svg")
+        self.assertIn("a&b<c", ["".join(t.itertext()) for t in root.iter(SVG_NS + "text")])
+
+    def test_shot_simulate_csv(self):
+        r = cli(self.server.address, "--format", "csv", *STRAIGHT_SHOT)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        rows = list(csv.reader(io.StringIO(r.stdout)))
+        self.assertEqual(rows[0], ["t_s", "id", "x_m", "y_m", "state"])
+        self.assertGreater(len(rows), 3)
+        for row in rows[1:]:
+            self.assertEqual(len(row), 5, row)
+            self.assertIn(row[1], ("cue", "1"))
+            self.assertIn(row[4], MOTION_STATES)
+        self.assertEqual(rows[1][:4], ["0", "cue", "-0.5", "0"])
+        self.assertEqual(rows[2][:4], ["0", "1", "0", "0"])
+        times = [float(row[0]) for row in rows[1:]]
+        self.assertEqual(times, sorted(times))
+
+    def test_shot_miscue_is_invalid_argument(self):
+        r = cli(self.server.address, *STRAIGHT_SHOT, "--a", "0.6")
+        self.assertEqual(r.returncode, 3, r.stderr)  # INVALID_ARGUMENT
+        self.assertTrue(r.stderr.startswith("sportsim: INVALID_ARGUMENT: "), r.stderr)
+        self.assertIn("miscue", r.stderr)
+        self.assertEqual(r.stdout, "")
+
+    def test_shot_bad_ball_is_usage(self):
+        r = cli(self.server.address, "shot", "simulate", "--ball", "bad", "--ball-speed", "2")
+        self.assertEqual(r.returncode, 64)
+        self.assertIn("--ball", r.stderr)
+        self.assertEqual(r.stdout, "")
+
+    def test_shot_chapter_scene(self):
+        # The chapter's scene: the unbounded table's default rack (chapter19).
+        r = cli(self.server.address, "--format", "json", "shot", "simulate", "--table",
+                "unbounded", "--ball-speed", "7")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        out = json.loads(r.stdout)
+        self.assertEqual(sorted(b["id"] for b in out["balls"]), ["1", "2", "8", "cue"])
+        self.assertTrue(out["at_rest"])
+        self.assertGreater(out["t_rest_s"], 0)
+        self.assertTrue(any(e["kind"] == "ball_ball" for e in out["events"]))
+        for b in out["balls"]:
+            self.assertNotEqual(b["state"], "pocketed")  # nothing to fall into
 
     def test_dashed_flags_and_negative_values(self):
         r = cli(self.server.address, "swing", "simulate", "--qbeta", "-20", "--qbeta-until",

@@ -2,6 +2,8 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <map>
+#include <string>
 #include <thread>
 
 #include <grpcpp/grpcpp.h>
@@ -9,8 +11,11 @@
 #include "gmock/gmock.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "gtest/gtest.h"
+#include "server/billiards_convert.h"
 #include "server/server_app.h"
 #include "server/swing_convert.h"
+#include "sim/billiards/shot.h"
+#include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
@@ -78,7 +83,160 @@ TEST_F(ServerTest, GetInfoReportsBuildAndCapabilities) {
   EXPECT_THAT(c.swing_integrators(), ::testing::ElementsAre("book", "euler", "semi_implicit_euler", "rk4", "dp45"));
   EXPECT_THAT(c.services(), Contains("sportsim.v1.Swing"));
   EXPECT_EQ(c.swing_parameters_size(), 11);
-  EXPECT_EQ(c.engines_size(), 0);  // billiards not served yet: honest empty lists
+}
+
+TEST_F(ServerTest, GetInfoListsTheBilliardsCapabilities) {
+  auto stub = v1::Server::NewStub(channel_);
+  v1::GetInfoResponse info;
+  ASSERT_TRUE(stub->GetInfo(Ctx().get(), {}, &info).ok());
+  const v1::Capabilities& c = info.capabilities();
+  EXPECT_THAT(c.services(), Contains("sportsim.v1.Billiards"));
+  // Only what runs: the event engine is not built yet.
+  EXPECT_THAT(c.engines(), ::testing::ElementsAre("stepped"));
+  EXPECT_THAT(c.integrators(), ::testing::ElementsAre("euler", "semi_implicit_euler", "rk4"));
+  EXPECT_THAT(c.table_presets(), ::testing::UnorderedElementsAre(
+                                     "pool-7ft", "pool-8ft", "pool-9ft", "snooker", "carom",
+                                     "unbounded"));
+  EXPECT_THAT(c.racks(), ::testing::UnorderedElementsAre("empty", "8ball", "9ball", "snooker",
+                                                         "three-cushion", "chapter19"));
+  // DESIGN.md's effects for --disable.
+  EXPECT_THAT(c.effects(), ::testing::UnorderedElementsAre(
+                               "drag", "spin_decay", "rolling_resistance", "ball_friction",
+                               "cushions", "pockets", "orientation", "squirt"));
+  // DESIGN.md: at least these parameters, each with a unit (where it has one), a default
+  // inside its range, and a description.
+  std::map<std::string, v1::ParameterInfo> params;
+  for (const v1::ParameterInfo& p : c.parameters()) {
+    EXPECT_TRUE(params.emplace(p.name(), p).second) << "listed twice: " << p.name();
+    EXPECT_LE(p.min_value(), p.default_value()) << p.name();
+    EXPECT_LE(p.default_value(), p.max_value()) << p.name();
+    EXPECT_FALSE(p.description().empty()) << p.name();
+  }
+  for (const char* name : {"gravity_mps2", "mu_slide", "mu_roll", "spin_decel_rps2", "e_ball",
+                           "e_cushion", "f_cushion", "ball_radius_m", "ball_mass_kg",
+                           "cue_mass_kg"}) {
+    EXPECT_TRUE(params.count(name)) << "GetInfo does not list parameter " << name;
+  }
+  if (params.count("gravity_mps2")) {
+    EXPECT_EQ(params["gravity_mps2"].default_value(), 9.81);
+    EXPECT_EQ(params["gravity_mps2"].unit(), "m/s^2");
+  }
+  for (const auto& [name, unit] : {std::pair<const char*, const char*>{"ball_radius_m", "m"},
+                                    {"ball_mass_kg", "kg"}, {"cue_mass_kg", "kg"}}) {
+    if (params.count(name)) {
+      EXPECT_EQ(params[name].unit(), unit) << name;
+    }
+  }
+}
+
+// A straight 2 m/s shot on an otherwise empty pool-9ft: cue at (-0.5, 0), ball 1 at (0, 0).
+v1::SimulateShotRequest StraightShot() {
+  v1::SimulateShotRequest req;
+  req.mutable_table()->set_preset("pool-9ft");
+  req.mutable_table()->set_rack("empty");
+  for (const auto& [id, x] : {std::pair<const char*, double>{"cue", -0.5}, {"1", 0.0}}) {
+    v1::BallPlacement* b = req.mutable_table()->add_balls();
+    b->set_id(id);
+    b->set_x_m(x);
+    b->set_y_m(0.0);
+  }
+  req.mutable_strike()->set_ball_speed_mps(2.0);
+  req.mutable_strike()->set_phi_deg(0.0);
+  return req;
+}
+
+TEST_F(ServerTest, SimulateShotComesToRest) {
+  auto stub = v1::Billiards::NewStub(channel_);
+  v1::SimulateShotResponse resp;
+  const grpc::Status s = stub->SimulateShot(Ctx().get(), StraightShot(), &resp);
+  ASSERT_TRUE(s.ok()) << s.error_message();
+  EXPECT_TRUE(resp.at_rest());
+  EXPECT_GT(resp.t_rest_s(), 0.0);
+  EXPECT_LT(resp.t_rest_s(), 600.0);
+  ASSERT_EQ(resp.balls_size(), 2);
+  for (const v1::BallState& b : resp.balls()) EXPECT_EQ(b.state(), v1::stationary) << b.id();
+  EXPECT_GT(resp.balls(1).x_m(), 0.0);  // ball 1 went +x
+  ASSERT_GT(resp.events_size(), 0);
+  EXPECT_EQ(resp.engine(), "stepped");
+  EXPECT_GE(resp.cpu_s(), 0.0);
+  EXPECT_FALSE(resp.has_geometry());
+}
+
+TEST_F(ServerTest, SimulateShotIsDeterministicAndBitIdenticalToTheLibrary) {
+  auto stub = v1::Billiards::NewStub(channel_);
+  v1::SimulateShotRequest req = StraightShot();
+  req.set_sample_rate_hz(240);
+  req.set_include_geometry(true);
+  v1::SimulateShotResponse first, second;
+  ASSERT_TRUE(stub->SimulateShot(Ctx().get(), req, &first).ok());
+  ASSERT_TRUE(stub->SimulateShot(Ctx().get(), req, &second).ok());
+  ASSERT_GT(first.samples_size(), 0);
+  first.clear_cpu_s();
+  second.clear_cpu_s();
+  EXPECT_EQ(first.SerializeAsString(), second.SerializeAsString());
+
+  absl::StatusOr<ShotJob> job = ShotJobFromProto(req);
+  ASSERT_TRUE(job.ok()) << job.status();
+  absl::StatusOr<billiards::ShotResult> direct =
+      billiards::SimulateShot(job->table.model, job->solver, job->table.state, job->shot);
+  ASSERT_TRUE(direct.ok()) << direct.status();
+  v1::SimulateShotResponse expected;
+  ShotResultToProto(*job, *direct, &expected);
+  expected.clear_cpu_s();
+  EXPECT_EQ(first.SerializeAsString(), expected.SerializeAsString());
+
+  // The break of the default table (many collisions) too.
+  v1::SimulateShotRequest brk;
+  brk.mutable_strike()->set_speed_mps(8.0);
+  brk.mutable_strike()->set_b(-0.2);
+  ASSERT_TRUE(stub->SimulateShot(Ctx().get(), brk, &first).ok());
+  ASSERT_TRUE(stub->SimulateShot(Ctx().get(), brk, &second).ok());
+  EXPECT_GT(first.events_size(), 20);
+  first.clear_cpu_s();
+  second.clear_cpu_s();
+  EXPECT_EQ(first.SerializeAsString(), second.SerializeAsString());
+}
+
+// A trajectory over the sample cap is refused, and the message names the request's field.
+TEST_F(ServerTest, TooManySamplesIsResourceExhaustedNamingTheField) {
+  auto stub = v1::Billiards::NewStub(channel_);
+  v1::SimulateShotRequest req;
+  req.mutable_table()->set_preset("unbounded");  // the chapter scene: about 33 s to rest
+  req.mutable_strike()->set_ball_speed_mps(7);
+  req.mutable_solver()->set_dt_s(1e-4);
+  req.set_sample_rate_hz(10000);  // 330000 samples, over the 200000 cap
+  v1::SimulateShotResponse resp;
+  const grpc::Status s = stub->SimulateShot(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << s.error_message();
+  // Regression: the message once named sample_interval_s, a field the API does not have.
+  EXPECT_THAT(s.error_message(), HasSubstr("sample_rate_hz"));
+}
+
+TEST_F(ServerTest, InvalidShotIsInvalidArgumentNamingTheField) {
+  auto stub = v1::Billiards::NewStub(channel_);
+  v1::SimulateShotResponse resp;
+  v1::SimulateShotRequest req = StraightShot();
+  req.mutable_table()->set_preset("pool-10ft");
+  grpc::Status s = stub->SimulateShot(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("table.preset"));
+
+  req = StraightShot();
+  req.mutable_strike()->set_a(0.6);
+  s = stub->SimulateShot(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("miscue"));
+
+  req = StraightShot();
+  req.mutable_table()->mutable_balls(1)->set_x_m(std::nan(""));
+  s = stub->SimulateShot(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("table.balls[1]"));
+
+  req = StraightShot();
+  req.mutable_solver()->set_engine(v1::ENGINE_EVENT);
+  s = stub->SimulateShot(Ctx().get(), req, &resp);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNIMPLEMENTED);
 }
 
 TEST_F(ServerTest, HealthIsServing) {
