@@ -81,10 +81,12 @@ Rates ClothRates(const TableModel& model, uint32_t disabled, MotionState state,
   return r;
 }
 
-double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
-                  TransitionKind kind) {
+namespace {
+
+// Time until one quantity reaches zero at the given (current) rates.
+double ZeroTime(const TableModel& model, const Ball& ball, const Rates& rates,
+                TransitionKind kind) {
   constexpr double kNever = std::numeric_limits<double>::infinity();
-  const Rates rates = ClothRates(model, disabled, ball.state, ball.v, ball.w);
   // Each quantity falls linearly at its current rate; time to reach zero.
   switch (kind) {
     case TransitionKind::kSlideEnd: {
@@ -113,11 +115,21 @@ double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
   return kNever;
 }
 
-NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball) {
+}  // namespace
+
+double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
+                  TransitionKind kind) {
+  return ZeroTime(model, ball, ClothRates(model, disabled, ball.state, ball.v, ball.w), kind);
+}
+
+NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball,
+                                Rates* rates_out) {
   NextTransition next;
+  const Rates rates = ClothRates(model, disabled, ball.state, ball.v, ball.w);
+  if (rates_out != nullptr) *rates_out = rates;
   for (TransitionKind kind :
        {TransitionKind::kSlideEnd, TransitionKind::kRollStop, TransitionKind::kSpinStop}) {
-    const double dt = TimeToZero(model, disabled, ball, kind);
+    const double dt = ZeroTime(model, ball, rates, kind);
     if (dt < next.dt_s) {
       next.dt_s = dt;
       next.kind = kind;

@@ -49,8 +49,10 @@ struct NextTransition {
   TransitionKind kind = TransitionKind::kNone;
 };
 /// Time until the ball's next transition at its current rates: exact without drag (the rates
-/// are then constant in every state), an estimate with drag (the engine re-checks).
-NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball);
+/// are then constant in every state), an estimate with drag (the engine re-checks). The rates
+/// it used go to `rates_out` when given (the engine needs them too).
+NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball,
+                                Rates* rates_out = nullptr);
 
 /// Time until one quantity (slip, speed or w_z, by `kind`) reaches zero at its current rate;
 /// infinity when it is not falling. With drag the engine uses it to re-check a predicted

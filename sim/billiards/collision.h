@@ -6,8 +6,9 @@
 //   contact slip u_t = tangential part of v_a - v_b + R (w_a + w_b) x n;
 //   friction impulse opposing u_t of magnitude min(mu J_n, m |u_t| / 7), mu = a + b exp(-c
 //   |u_t|) (Alciatore, TP A-14: mu falls with the sliding speed of the two surfaces at the
-//   contact; for a stun cut |u_t| = v sin(cut)): never more than the impulse that stops the slip, 7 being
-//   the two balls' combined effective inverse mass at the contact (1 + 1 + 5/2 + 5/2).
+//   contact; for a stun cut |u_t| = v sin(cut)): never more than the impulse that stops the
+//   slip, 7 being the two balls' combined effective inverse mass at the contact
+//   (1 + 1 + 5/2 + 5/2).
 //   The vertical part of the velocity change goes into the slate.
 // Ball-cushion: see CushionModel in model.h and docs/billiards.md.
 #ifndef SPORTSIM_SIM_BILLIARDS_COLLISION_H_

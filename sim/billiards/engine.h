@@ -29,8 +29,6 @@ enum class Integrator : uint8_t {
 
 std::span<const std::string_view> EngineNames();      ///< "event", "stepped"
 std::span<const std::string_view> IntegratorNames();  ///< "euler", "semi_implicit_euler", "rk4"
-bool EngineFromName(std::string_view name, Engine* out);
-bool IntegratorFromName(std::string_view name, Integrator* out);
 std::string_view EngineName(Engine e);
 std::string_view IntegratorName(Integrator i);
 
@@ -49,11 +47,16 @@ absl::Status ValidateSolverOptions(const SolverOptions& options);
 /// Advances `state` to `t_end_s` (>= state->t_s), appending what happens to `events` in time
 /// order. The stepped engine steps on the grid t = k dt_s (a t_end off the grid ends with a
 /// partial step), so chunked calls that end on grid points give bit-identical results. A table
-/// at rest costs nothing. A stationary or spinning ball that has been given a velocity starts
-/// moving (its state is re-derived, with a transition event). Errors: InvalidArgument for bad options, ResourceExhausted at the
-/// event cap, Internal if the state turns non-finite (with the time).
+/// at rest costs nothing. Balls given a velocity start moving first (StartMoving). Errors:
+/// InvalidArgument for bad options, ResourceExhausted at the event cap, Internal if the state
+/// turns non-finite (with the time).
 absl::Status Advance(const TableModel& model, const SolverOptions& options, double t_end_s,
                      TableState* state, std::vector<Event>* events);
+
+/// Balls that are stationary or spinning but have been given a velocity from outside (a
+/// strike, explicit motions) start moving: their motion state is re-derived, with a transition
+/// event. Advance does this on entry; SimulateShot before it asks whether the table is at rest.
+void StartMoving(const TableModel& model, TableState* state, std::vector<Event>* events);
 
 /// Total kinetic energy of the balls on the cloth (J).
 double TotalKineticEnergy(const TableModel& model, const TableState& state);

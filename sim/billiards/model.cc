@@ -230,9 +230,4 @@ absl::StatusOr<TableModel> TableModel::Create(TableSpec spec) {
   return TableModel(std::move(spec));
 }
 
-bool TableModel::OnCloth(const Eigen::Vector2d& p) const {
-  if (!spec_.bounded) return true;
-  return std::abs(p.x()) <= 0.5 * spec_.length_m && std::abs(p.y()) <= 0.5 * spec_.width_m;
-}
-
 }  // namespace sportsim::billiards

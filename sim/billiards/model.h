@@ -147,8 +147,6 @@ class TableModel {
   double cushion_contact_distance() const { return cushion_contact_; }
   /// sin of the angle of the cushion contact point above the ball's equator: (h - R) / R.
   double cushion_sin() const { return cushion_sin_; }
-  /// Whether (x, y) is inside the playing area (always true on an unbounded table).
-  bool OnCloth(const Eigen::Vector2d& p) const;
 
  private:
   explicit TableModel(TableSpec spec);

@@ -51,18 +51,7 @@ absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOpt
   ShotResult out;
   out.final_state = initial;
   TableState& s = out.final_state;
-  for (size_t i = 0; i < s.balls.size(); ++i) {
-    Ball& b = s.balls[i];
-    b.r.z() = model.radius();
-    b.v.z() = 0.0;
-    const MotionState from = b.state;
-    b.state = Classify(model, b);
-    if (b.state != from) {
-      out.events.push_back({.t_s = s.t_s, .kind = EventKind::kTransition,
-                            .a = static_cast<int>(i), .from = from, .to = b.state,
-                            .va = b.v.head<2>()});
-    }
-  }
+  StartMoving(model, &s, &out.events);
   const double t_start = s.t_s;
   const double t_stop = t_start + shot.max_time_s;
   // Chunks end on the step grid: whole numbers of steps per sample, or 1024 steps without

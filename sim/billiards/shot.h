@@ -33,9 +33,10 @@ struct ShotResult {
 };
 
 /// Simulates from `initial` (velocities and spins already set, e.g. by ApplyStrike) until every
-/// ball is at rest or max_time_s passes. The motion states are re-derived from the velocities
-/// first (transitions at the start time are reported). Samples fall on step boundaries (the
-/// interval is rounded to a whole number of steps) so sampling never changes the physics.
+/// ball is at rest or max_time_s passes. Balls at rest that were given a velocity start moving
+/// first (StartMoving; their transitions at the start time are reported). Samples fall on step
+/// boundaries (the interval is rounded to a whole number of steps), so sampling never changes
+/// the physics.
 absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOptions& options,
                                         const TableState& initial, const ShotOptions& shot);
 

@@ -279,24 +279,35 @@ TEST(SteppedEngineTest, CushionsOffLetBallsLeaveTheTable) {
   EXPECT_EQ(s.balls[0].pocket, -1);
 }
 
-// Han-geometry cushion: a ball rolling straight into a rail comes back slower (the nose above
-// the centre and e_c < 1 take energy), and a mirror cushion keeps speed exactly.
+// Han-geometry cushion. Without friction the impulse (1 + e_c) m |v.n| acts along the contact
+// normal n, tilted down by theta (sin theta = (h - R) / R), and the slate takes its vertical
+// part: a head-on ball comes back at ((1 + e_c) cos^2 theta - 1) v. With friction (f_c = 0.2) a
+// rolling ball loses kinetic energy and stays on its line. The mirror keeps speed exactly.
 TEST(SteppedEngineTest, CushionRebounds) {
   for (CushionModel cm : {CushionModel::kHan, CushionModel::kMirror}) {
-    PhysicsParams p;
-    p.cushion_model = cm;
-    p.cushion_height_m = 0.635 * 2 * p.ball_radius_m;
-    const TableModel m = Model("carom", &p);
-    Ball b = BallAt("cue", 0, 0, m);
-    b.v = Eigen::Vector3d(0, 2.0, 0);
-    b.w = Eigen::Vector3d(-2.0 / m.radius(), 0, 0);  // rolling toward +y
-    b.state = MotionState::kRolling;
-    ASSERT_TRUE(CollideCushion(m, Eigen::Vector2d(0, -1), &b));
-    EXPECT_LT(b.v.y(), 0.0);
-    if (cm == CushionModel::kMirror) {
-      EXPECT_DOUBLE_EQ(b.v.y(), -2.0);
-    } else {
-      EXPECT_GT(b.v.y(), -2.0 * p.e_cushion);
+    for (double f : {0.0, 0.2}) {
+      PhysicsParams p;
+      p.cushion_model = cm;
+      p.f_cushion = f;
+      p.cushion_height_m = 0.635 * 2 * p.ball_radius_m;
+      const TableModel m = Model("carom", &p);
+      Ball b = BallAt("cue", 0, 0, m);
+      b.v = Eigen::Vector3d(0, 2.0, 0);
+      b.w = Eigen::Vector3d(-2.0 / m.radius(), 0, 0);  // rolling toward +y
+      b.state = MotionState::kRolling;
+      const double e0 = KineticEnergy(m, b);
+      ASSERT_TRUE(CollideCushion(m, Eigen::Vector2d(0, -1), &b));
+      if (cm == CushionModel::kMirror) {
+        EXPECT_DOUBLE_EQ(b.v.y(), -2.0);
+        continue;
+      }
+      const double s = (p.cushion_height_m - p.ball_radius_m) / p.ball_radius_m;
+      if (f == 0.0) {
+        EXPECT_NEAR(b.v.y(), -((1 + p.e_cushion) * (1 - s * s) - 1) * 2.0, 1e-12);
+      } else {
+        EXPECT_LT(b.v.y(), 0.0);
+        EXPECT_LT(KineticEnergy(m, b), e0);
+      }
       EXPECT_NEAR(b.v.x(), 0.0, 1e-12);
     }
   }
