@@ -108,7 +108,7 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
 absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver) {
   b::SolverOptions o;
   switch (solver.engine()) {
-    case v1::ENGINE_UNSPECIFIED:
+    case v1::ENGINE_UNSPECIFIED: o.engine = b::Engine::kEvent; break;  // drag: see below
     case v1::ENGINE_STEPPED: o.engine = b::Engine::kStepped; break;
     case v1::ENGINE_EVENT: o.engine = b::Engine::kEvent; break;
     default:
@@ -148,6 +148,10 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
           absl::StrFormat("solver: effect \"%s\" is both enabled and disabled", name));
     }
     o.disabled &= ~bit;
+  }
+  // Without an engine named, a scene with air drag (no closed form) gets the stepped engine.
+  if (solver.engine() == v1::ENGINE_UNSPECIFIED && (o.disabled & b::kEffectDrag) == 0) {
+    o.engine = b::Engine::kStepped;
   }
   if (absl::Status s = b::ValidateSolverOptions(o); !s.ok()) return In("solver.", s);
   return o;
@@ -367,7 +371,7 @@ void ShotResultToProto(const ShotJob& job, const b::ShotResult& result,
 }
 
 void AddBilliardsCapabilities(v1::Capabilities* caps) {
-  caps->add_engines("stepped");
+  for (std::string_view e : b::EngineNames()) caps->add_engines(std::string(e));  // default first
   for (std::string_view i : b::IntegratorNames()) caps->add_integrators(std::string(i));
   for (std::string_view p : b::TablePresetNames()) caps->add_table_presets(std::string(p));
   for (std::string_view r : b::RackNames()) caps->add_racks(std::string(r));

@@ -9,6 +9,7 @@
 #include "absl/strings/str_format.h"
 #include "sim/billiards/cloth.h"
 #include "sim/billiards/collision.h"
+#include "sim/billiards/event_engine.h"
 #include "sim/core/check.h"
 #include "sim/core/root_find.h"
 
@@ -128,9 +129,11 @@ std::pair<double, double> ChordToSegment(const Eigen::Vector2d& p0, const Eigen:
 
 class SteppedEngine {
  public:
+  // `counted` events were handled before this run (the cap covers the whole simulation).
   SteppedEngine(const TableModel& model, const SolverOptions& options, TableState* state,
-                std::vector<Event>* events)
-      : model_(model), o_(options), s_(state), events_(events), n_(state->balls.size()) {
+                std::vector<Event>* events, int64_t counted)
+      : model_(model), o_(options), s_(state), events_(events), n_(state->balls.size()),
+        events_base_(static_cast<int64_t>(events->size()) - counted) {
     trial_.resize(n_);
     next_.resize(n_);
     margin_.resize(n_);
@@ -181,7 +184,7 @@ class SteppedEngine {
             "more than %d collisions and transitions within one step at t = %.9f s", kMaxSubsteps,
             s_->t_s));
       }
-      if (static_cast<int64_t>(events_->size()) > o_.max_events) {
+      if (static_cast<int64_t>(events_->size()) - events_base_ > o_.max_events) {
         return absl::ResourceExhaustedError(absl::StrFormat(
             "event cap of %d reached at t = %.9f s", o_.max_events, s_->t_s));
       }
@@ -525,13 +528,61 @@ class SteppedEngine {
   TableState* s_;
   std::vector<Event>* events_;
   size_t n_;
+  int64_t events_base_;
   std::vector<Ball> trial_;
   std::vector<NextTransition> next_;
   std::vector<double> margin_;
   std::vector<double> accel_;  // |dv/dt| at the start of the sub-step (m/s^2)
 };
 
+// The stepped engine behind the TableSimulation interface: the table state is the state.
+class SteppedSimulation final : public TableSimulation {
+ public:
+  SteppedSimulation(const TableModel& model, const SolverOptions& options, TableState state)
+      : model_(model), o_(options), state_(std::move(state)) {}
+
+  absl::Status AdvanceTo(double t_s, std::vector<Event>* events) override {
+    if (!(std::isfinite(t_s) && t_s >= state_.t_s)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "t_end_s must be finite and not before the table's time %g s, got %g", state_.t_s,
+          t_s));
+    }
+    const size_t before = events->size();
+    SteppedEngine engine(model_, o_, &state_, events, processed_);
+    const absl::Status s = engine.Run(t_s);
+    processed_ += static_cast<int64_t>(events->size() - before);
+    return s;
+  }
+  const TableState& state() override { return state_; }
+  double time() const override { return state_.t_s; }
+  bool AtRest() const override { return state_.AtRest(); }
+  int64_t events_processed() const override { return processed_; }
+
+ private:
+  const TableModel& model_;
+  const SolverOptions o_;
+  TableState state_;
+  int64_t processed_ = 0;
+};
+
 }  // namespace
+
+absl::StatusOr<std::unique_ptr<TableSimulation>> TableSimulation::Create(
+    const TableModel& model, const SolverOptions& options, TableState initial,
+    std::vector<Event>* events) {
+  if (absl::Status s = ValidateSolverOptions(options); !s.ok()) return s;
+  if (!std::isfinite(initial.t_s)) {
+    return absl::InvalidArgumentError("the table's time must be finite");
+  }
+  StartMoving(model, &initial, events);
+  std::unique_ptr<TableSimulation> sim;
+  if (options.engine == Engine::kEvent) {
+    sim = MakeEventSimulation(model, options, std::move(initial));
+  } else {
+    sim = std::make_unique<SteppedSimulation>(model, options, std::move(initial));
+  }
+  return sim;
+}
 
 std::span<const std::string_view> EngineNames() { return kEngines; }
 std::span<const std::string_view> IntegratorNames() { return kIntegrators; }
@@ -562,7 +613,6 @@ absl::Status ValidateSolverOptions(const SolverOptions& o) {
           "engine: the event engine cannot model air drag (it has no closed form): use engine "
           "stepped or disable drag");
     }
-    return absl::UnimplementedError("engine: the event engine is not built yet: use stepped");
   }
   return absl::OkStatus();
 }
@@ -575,8 +625,12 @@ absl::Status Advance(const TableModel& model, const SolverOptions& options, doub
         "t_end_s must be finite and not before the table's time %g s, got %g", state->t_s,
         t_end_s));
   }
-  SteppedEngine engine(model, options, state, events);
-  return engine.Run(t_end_s);
+  absl::StatusOr<std::unique_ptr<TableSimulation>> sim =
+      TableSimulation::Create(model, options, *state, events);
+  if (!sim.ok()) return sim.status();
+  const absl::Status s = (*sim)->AdvanceTo(t_end_s, events);
+  *state = (*sim)->state();
+  return s;
 }
 
 void StartMoving(const TableModel& model, TableState* state, std::vector<Event>* events) {

@@ -3,11 +3,13 @@
 #define SPORTSIM_SIM_BILLIARDS_ENGINE_H_
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string_view>
 #include <vector>
 
 #include "absl/status/status.h"
+#include "absl/status/statusor.h"
 #include "sim/billiards/model.h"
 #include "sim/billiards/state.h"
 
@@ -33,21 +35,54 @@ std::string_view EngineName(Engine e);
 std::string_view IntegratorName(Integrator i);
 
 struct SolverOptions {
-  Engine engine = Engine::kStepped;
+  Engine engine = Engine::kEvent;
   Integrator integrator = Integrator::kRk4;
   double dt_s = 1.0 / 960.0;   ///< stepped engine: step (s), in [1e-6, 0.1]
   bool ccd = true;             ///< stepped engine: continuous collision detection
   uint32_t disabled = kEffectDrag;  ///< Effect bits switched off; drag is off by default
-  int64_t max_events = 200000; ///< a run that records more events stops with ResourceExhausted
+  /// A run that handles more events stops with ResourceExhausted. The stepped engine counts the
+  /// events it records; the event engine counts every event it processes (collisions,
+  /// transitions and the resting-contact pushes it does not report).
+  int64_t max_events = 200000;
 };
 
 /// Checks ranges, and that the engine can model the enabled effects.
 absl::Status ValidateSolverOptions(const SolverOptions& options);
 
+/// A table moving under one engine, advanced by the caller to later times (a server's ticks)
+/// or to rest. The event engine keeps every ball's closed-form trajectory since its last event,
+/// so the state at a time is a function of the events alone: advancing in any chunks gives
+/// bit-identical states and events. The stepped engine steps on the grid t = k dt.
+class TableSimulation {
+ public:
+  /// Validates the options, starts balls that were given a velocity moving (StartMoving: their
+  /// transitions go to `events`) and predicts what happens next. The model must outlive the
+  /// simulation.
+  static absl::StatusOr<std::unique_ptr<TableSimulation>> Create(const TableModel& model,
+                                                                 const SolverOptions& options,
+                                                                 TableState initial,
+                                                                 std::vector<Event>* events);
+  virtual ~TableSimulation() = default;
+
+  /// Moves to `t_s` (>= time()), appending the events up to and including t_s in time order.
+  /// Errors: InvalidArgument for a bad time, ResourceExhausted at the event cap, Internal if the
+  /// state turns non-finite. After an error the simulation must not be advanced again.
+  virtual absl::Status AdvanceTo(double t_s, std::vector<Event>* events) = 0;
+  /// The table at time().
+  virtual const TableState& state() = 0;
+  virtual double time() const = 0;
+  /// Every ball stationary or pocketed: nothing happens until a ball is given a velocity.
+  virtual bool AtRest() const = 0;
+  /// Events handled so far, reported or not (what max_events caps).
+  virtual int64_t events_processed() const = 0;
+};
+
 /// Advances `state` to `t_end_s` (>= state->t_s), appending what happens to `events` in time
-/// order. The stepped engine steps on the grid t = k dt_s (a t_end off the grid ends with a
-/// partial step), so chunked calls that end on grid points give bit-identical results. A table
-/// at rest costs nothing. Balls given a velocity start moving first (StartMoving). Errors:
+/// order: TableSimulation::Create, then AdvanceTo. The stepped engine steps on the grid
+/// t = k dt_s (a t_end off the grid ends with a partial step), so chunked calls that end on grid
+/// points give bit-identical results; the event engine restarts its trajectories from the
+/// state given, so chunked calls agree to rounding only (keep a TableSimulation to get
+/// bit-identical chunks). A table at rest costs nothing. Balls given a velocity start moving first (StartMoving). Errors:
 /// InvalidArgument for bad options, ResourceExhausted at the event cap, Internal if the state
 /// turns non-finite (with the time).
 absl::Status Advance(const TableModel& model, const SolverOptions& options, double t_end_s,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "absl/strings/str_format.h"
 #include "sim/billiards/cloth.h"
@@ -49,35 +50,42 @@ absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOpt
   if (absl::Status s = ValidateLayout(model, initial); !s.ok()) return s;
   const double cpu0 = ThreadCpuSeconds();
   ShotResult out;
-  out.final_state = initial;
-  TableState& s = out.final_state;
-  StartMoving(model, &s, &out.events);
-  const double t_start = s.t_s;
+  absl::StatusOr<std::unique_ptr<TableSimulation>> created =
+      TableSimulation::Create(model, options, initial, &out.events);
+  if (!created.ok()) return created.status();
+  TableSimulation& sim = **created;
+  const double t_start = sim.time();
   const double t_stop = t_start + shot.max_time_s;
-  // Chunks end on the step grid: whole numbers of steps per sample, or 1024 steps without
-  // sampling (where cancellation is polled).
+  // Chunks: one per sample, or (without sampling) 1024 steps or one simulated second, where
+  // cancellation is polled. The stepped engine's chunks end on its step grid (whole numbers of
+  // steps), so sampling never changes its physics; the event engine's never do.
+  const bool stepped = options.engine == Engine::kStepped;
   const double dt = options.dt_s;
-  const double chunk = shot.sample_interval_s > 0
-                           ? std::max(1.0, std::round(shot.sample_interval_s / dt)) * dt
-                           : 1024.0 * dt;
-  if (shot.sample_interval_s > 0) out.samples.push_back(TakeSample(s));
+  double chunk = stepped ? 1024.0 * dt : 1.0;
+  if (shot.sample_interval_s > 0) {
+    chunk = stepped ? std::max(1.0, std::round(shot.sample_interval_s / dt)) * dt
+                    : shot.sample_interval_s;
+    out.samples.push_back(TakeSample(sim.state()));
+  }
   int64_t k = 0;
-  while (!s.AtRest() && s.t_s < t_stop) {
+  while (!sim.AtRest() && sim.time() < t_stop) {
     ++k;
     if (shot.cancelled && shot.cancelled()) {
-      return absl::CancelledError(absl::StrFormat("cancelled at t = %.6f s", s.t_s));
+      return absl::CancelledError(absl::StrFormat("cancelled at t = %.6f s", sim.time()));
     }
     const double t_next = std::min(t_start + static_cast<double>(k) * chunk, t_stop);
-    if (absl::Status st = Advance(model, options, t_next, &s, &out.events); !st.ok()) return st;
+    if (absl::Status st = sim.AdvanceTo(t_next, &out.events); !st.ok()) return st;
     if (shot.sample_interval_s > 0) {
       if (static_cast<int64_t>(out.samples.size()) >= shot.max_samples) {
         return absl::ResourceExhaustedError(absl::StrFormat(
             "the trajectory would exceed %d samples: sample less often (sample_interval_s, "
             "sample_rate_hz on the wire)", shot.max_samples));
       }
-      out.samples.push_back(TakeSample(s));
+      out.samples.push_back(TakeSample(sim.state()));
     }
   }
+  out.final_state = sim.state();
+  const TableState& s = out.final_state;
   out.at_rest = s.AtRest();
   out.t_rest_s = t_start;
   if (out.at_rest) {

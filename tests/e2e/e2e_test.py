@@ -115,7 +115,7 @@ class CliAgainstServer(unittest.TestCase):
         r = cli(self.server.address, "info", "--format", "json")
         self.assertEqual(r.returncode, 0, r.stderr)
         caps = json.loads(r.stdout)["capabilities"]
-        self.assertIn("stepped", caps["engines"])
+        self.assertEqual(caps["engines"], ["event", "stepped"])
         self.assertIn("pool-9ft", caps["table_presets"])
         self.assertIn("chapter19", caps["racks"])
         self.assertIn("squirt", caps["effects"])

@@ -48,6 +48,20 @@ v1::SimulateShotRequest StraightShot() {
   return r;
 }
 
+// The default engine is the event engine; asking for drag without naming an engine picks the
+// stepped engine (drag has no closed form), while naming the event engine with drag is an error
+// (tested with the rejections below).
+TEST(BilliardsConvertTest, DragWithoutAnEngineNamedRunsStepped) {
+  v1::SimulateShotRequest r = Strike2();
+  r.mutable_solver()->add_enable("drag");
+  absl::StatusOr<ShotJob> job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->solver.engine, b::Engine::kStepped);
+  EXPECT_EQ(job->solver.disabled & b::kEffectDrag, 0u);
+  r.mutable_solver()->set_engine(v1::ENGINE_STEPPED);
+  ASSERT_TRUE(ShotJobFromProto(r).ok());
+}
+
 TEST(BilliardsConvertTest, DefaultsArePool9ftWith8BallRack) {
   absl::StatusOr<ShotJob> job = ShotJobFromProto(Strike2());
   ASSERT_TRUE(job.ok()) << job.status();
@@ -62,7 +76,7 @@ TEST(BilliardsConvertTest, DefaultsArePool9ftWith8BallRack) {
   EXPECT_EQ(job->table.model.params().cushion_model, b::CushionModel::kHan);
   EXPECT_EQ(job->table.model.params().mu_slide, b::PhysicsParams().mu_slide);
   // Solver defaults.
-  EXPECT_EQ(job->solver.engine, b::Engine::kStepped);
+  EXPECT_EQ(job->solver.engine, b::Engine::kEvent);
   EXPECT_EQ(job->solver.integrator, b::Integrator::kRk4);
   EXPECT_EQ(job->solver.dt_s, 1.0 / 960.0);
   EXPECT_TRUE(job->solver.ccd);
@@ -459,10 +473,7 @@ INSTANTIATE_TEST_SUITE_P(
                      r->mutable_solver()->set_engine(v1::ENGINE_EVENT);
                      r->mutable_solver()->add_enable("drag");
                    },
-                   "drag", "solver.engine"},
-        BadRequest{"event_engine_not_built",
-                   [](auto* r) { r->mutable_solver()->set_engine(v1::ENGINE_EVENT); },
-                   "event engine", "solver", absl::StatusCode::kUnimplemented}),
+                   "drag", "solver.engine"}),
     [](const auto& param_info) { return std::string(param_info.param.name); });
 
 // ---- ShotResultToProto ----
@@ -497,7 +508,7 @@ TEST(BilliardsResultToProtoTest, StraightShotEventsBallsAndSamples) {
   EXPECT_GT(out.t_rest_s(), 0.0);
   EXPECT_EQ(out.t_rest_s(), run.result.t_rest_s);
   EXPECT_EQ(out.cpu_s(), run.result.cpu_s);
-  EXPECT_EQ(out.engine(), "stepped");
+  EXPECT_EQ(out.engine(), "event");
   EXPECT_EQ(out.integrator(), "rk4");
   EXPECT_EQ(out.dt_s(), 1.0 / 960.0);
 

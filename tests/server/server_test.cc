@@ -92,7 +92,7 @@ TEST_F(ServerTest, GetInfoListsTheBilliardsCapabilities) {
   const v1::Capabilities& c = info.capabilities();
   EXPECT_THAT(c.services(), Contains("sportsim.v1.Billiards"));
   // Only what runs: the event engine is not built yet.
-  EXPECT_THAT(c.engines(), ::testing::ElementsAre("stepped"));
+  EXPECT_THAT(c.engines(), ::testing::ElementsAre("event", "stepped"));
   EXPECT_THAT(c.integrators(), ::testing::ElementsAre("euler", "semi_implicit_euler", "rk4"));
   EXPECT_THAT(c.table_presets(), ::testing::UnorderedElementsAre(
                                      "pool-7ft", "pool-8ft", "pool-9ft", "snooker", "carom",
@@ -157,7 +157,7 @@ TEST_F(ServerTest, SimulateShotComesToRest) {
   for (const v1::BallState& b : resp.balls()) EXPECT_EQ(b.state(), v1::stationary) << b.id();
   EXPECT_GT(resp.balls(1).x_m(), 0.0);  // ball 1 went +x
   ASSERT_GT(resp.events_size(), 0);
-  EXPECT_EQ(resp.engine(), "stepped");
+  EXPECT_EQ(resp.engine(), "event");
   EXPECT_GE(resp.cpu_s(), 0.0);
   EXPECT_FALSE(resp.has_geometry());
 }
@@ -235,8 +235,28 @@ TEST_F(ServerTest, InvalidShotIsInvalidArgumentNamingTheField) {
 
   req = StraightShot();
   req.mutable_solver()->set_engine(v1::ENGINE_EVENT);
+  req.mutable_solver()->add_enable("drag");
   s = stub->SimulateShot(Ctx().get(), req, &resp);
-  EXPECT_EQ(s.error_code(), grpc::StatusCode::UNIMPLEMENTED);
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), HasSubstr("drag"));
+}
+
+// The event engine and the stepped engine (rk4, exact without drag) agree on a shot.
+TEST_F(ServerTest, EventAndSteppedEnginesAgree) {
+  auto stub = v1::Billiards::NewStub(channel_);
+  v1::SimulateShotResponse ev, st;
+  v1::SimulateShotRequest req = StraightShot();
+  req.mutable_solver()->set_engine(v1::ENGINE_EVENT);
+  ASSERT_TRUE(stub->SimulateShot(Ctx().get(), req, &ev).ok());
+  req.mutable_solver()->set_engine(v1::ENGINE_STEPPED);
+  ASSERT_TRUE(stub->SimulateShot(Ctx().get(), req, &st).ok());
+  ASSERT_EQ(ev.balls_size(), st.balls_size());
+  EXPECT_EQ(ev.events_size(), st.events_size());
+  for (int i = 0; i < ev.balls_size(); ++i) {
+    // Both exact up to rounding and the stepped engine's 1e-13 s contact tolerance.
+    EXPECT_NEAR(ev.balls(i).x_m(), st.balls(i).x_m(), 1e-9) << i;
+    EXPECT_NEAR(ev.balls(i).y_m(), st.balls(i).y_m(), 1e-9) << i;
+  }
 }
 
 TEST_F(ServerTest, HealthIsServing) {

@@ -1,5 +1,5 @@
-// The closed-form validation cases of PHYSICS.md section 4 (billiards), run on the stepped
-// engine for every integrator: ball-cloth laws, collisions, the cue strike, energy and momentum,
+// The closed-form validation cases of PHYSICS.md section 4 (billiards), run on the event engine
+// and on the stepped engine for every integrator: ball-cloth laws, collisions, the cue strike, energy and momentum,
 // the mirror cushion, and the chapter's demonstration scene.
 //
 // How the tolerances follow from the engine: without drag every ball-cloth law has constant
@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -65,8 +66,26 @@ constexpr double kArithRel = 1e-13;
 // is ~1e4 ulps, and any real gain (e.g. a wrong restitution) is many orders larger.
 constexpr double kEnergyRel = 1e-12;
 
-std::string Name(const ::testing::TestParamInfo<Integrator>& info) {
-  return std::string(IntegratorName(info.param));
+// Positions (m) from the event engine: r0 + tau (v0 + a tau / 2) from the last event, with
+// event times exact to rounding (closed-form transitions, contact roots polished to ~1e-16
+// relative): a few roundings at |r| <= 3 m per segment, ~1e-15 m each, and at most tens of
+// segments; 1e-9 m (the precision the event engine promises) leaves three orders of margin.
+constexpr double kEventPosM = 1e-9;
+
+// What a closed-form test runs on: the event engine, or the stepped engine with an integrator.
+struct Scheme {
+  Engine engine;
+  Integrator integrator;
+};
+std::ostream& operator<<(std::ostream& os, const Scheme& s) {
+  return os << (s.engine == Engine::kEvent ? std::string("event")
+                                           : std::string(IntegratorName(s.integrator)));
+}
+
+std::string Name(const ::testing::TestParamInfo<Scheme>& info) {
+  std::ostringstream os;
+  os << info.param;
+  return os.str();
 }
 
 template <typename T>
@@ -171,9 +190,26 @@ TableState AdvanceTo(const TableModel& model, const SolverOptions& options, Tabl
   return state;
 }
 
-class ClosedFormTest : public ::testing::TestWithParam<Integrator> {
+class ClosedFormTest : public ::testing::TestWithParam<Scheme> {
  protected:
-  Integrator integrator() const { return GetParam(); }
+  bool event() const { return GetParam().engine == Engine::kEvent; }
+  // The event engine is exact like rk4, so it shares rk4's scheme error (none).
+  Integrator integrator() const { return GetParam().integrator; }
+  SolverOptions Options(uint32_t disabled = 0) const {
+    SolverOptions o = Solver(integrator(), disabled);
+    o.engine = GetParam().engine;
+    return o;
+  }
+  double PosTol(std::initializer_list<std::pair<double, double>> phases) const {
+    return event() ? kEventPosM : PositionTol(integrator(), phases);
+  }
+  // Event times: closed-form transitions and polished contact roots, rounding of t ~ 10 s.
+  double TimeTol() const { return event() ? 1e-11 : kTimeTolS; }
+  std::string SchemeName() const {
+    std::ostringstream os;
+    os << GetParam();
+    return os.str();
+  }
 };
 
 // --- Case 1: slide to roll with no spin, then roll to rest. ---------------------------------
@@ -195,7 +231,7 @@ TEST_P(ClosedFormTest, SlideToRollWithoutSpinThenRollToRest) {
     const double t_roll = v_roll / (mu_r * g);
     const double d_roll = v_roll * v_roll / (2.0 * mu_r * g);
 
-    absl::StatusOr<ShotResult> shot = SimulateShot(model, Solver(integrator()), start, {});
+    absl::StatusOr<ShotResult> shot = SimulateShot(model, Options(), start, {});
     ASSERT_TRUE(shot.ok()) << shot.status();
     ASSERT_TRUE(shot->at_rest);
     const Event* roll =
@@ -204,22 +240,22 @@ TEST_P(ClosedFormTest, SlideToRollWithoutSpinThenRollToRest) {
         FindTransition(shot->events, 0, MotionState::kRolling, MotionState::kStationary);
     ASSERT_NE(roll, nullptr);
     ASSERT_NE(stop, nullptr);
-    EXPECT_NEAR(roll->t_s, t_slide, kTimeTolS);
+    EXPECT_NEAR(roll->t_s, t_slide, TimeTol());
     EXPECT_NEAR(roll->va.x(), v_roll * d.x(), kVelTolMps);
     EXPECT_NEAR(roll->va.y(), v_roll * d.y(), kVelTolMps);
-    EXPECT_NEAR(stop->t_s - roll->t_s, t_roll, kTimeTolS);
-    EXPECT_NEAR(shot->t_rest_s, t_slide + t_roll, kTimeTolS);
+    EXPECT_NEAR(stop->t_s - roll->t_s, t_roll, TimeTol());
+    EXPECT_NEAR(shot->t_rest_s, t_slide + t_roll, TimeTol());
     const Eigen::Vector2d travelled =
         shot->final_state.balls[0].r.head<2>() - start.balls[0].r.head<2>();
-    const double pos_tol = PositionTol(integrator(), {{mu_s * g, t_slide}, {mu_r * g, t_roll}});
+    const double pos_tol = PosTol({{mu_s * g, t_slide}, {mu_r * g, t_roll}});
     EXPECT_NEAR(travelled.dot(d), d_slide + d_roll, pos_tol);
     EXPECT_NEAR(AngleFromTo(d, travelled), 0.0, kAngleTolRad);
 
     // The slide alone: stop exactly at the closed-form slide end.
     std::vector<Event> events;
-    const TableState at_roll = AdvanceTo(model, Solver(integrator()), start, t_slide, &events);
+    const TableState at_roll = AdvanceTo(model, Options(), start, t_slide, &events);
     const Eigen::Vector2d slid = at_roll.balls[0].r.head<2>() - start.balls[0].r.head<2>();
-    EXPECT_NEAR(slid.dot(d), d_slide, PositionTol(integrator(), {{mu_s * g, t_slide}}));
+    EXPECT_NEAR(slid.dot(d), d_slide, PosTol({{mu_s * g, t_slide}}));
   }
 }
 
@@ -249,10 +285,10 @@ TEST_P(ClosedFormTest, SpinAlongTheLineSetsTheRollingSpeedAndSlideTime) {
     const double t_slide = 2.0 * std::abs(u0) / (7.0 * mu_s * g);
     std::vector<Event> events;
     const TableState end =
-        AdvanceTo(model, Solver(integrator()), start, t_slide + 0.01, &events);
+        AdvanceTo(model, Options(), start, t_slide + 0.01, &events);
     const Event* roll = FindTransition(events, 0, MotionState::kSliding, MotionState::kRolling);
     ASSERT_NE(roll, nullptr);
-    EXPECT_NEAR(roll->t_s, t_slide, kTimeTolS);
+    EXPECT_NEAR(roll->t_s, t_slide, TimeTol());
     EXPECT_NEAR(roll->va.dot(d), v_final, kVelTolMps);
     EXPECT_NEAR(roll->va.x() * d.y() - roll->va.y() * d.x(), 0.0, kVelTolMps);  // on the line
     if (c.r_omega < -2.5 * c.v0) {
@@ -261,11 +297,11 @@ TEST_P(ClosedFormTest, SpinAlongTheLineSetsTheRollingSpeedAndSlideTime) {
     EXPECT_EQ(end.balls[0].state, MotionState::kRolling);
 
     // Position at the end of the slide: constant deceleration mu_s g against the slip.
-    const TableState at_roll = AdvanceTo(model, Solver(integrator()), start, t_slide, &events);
+    const TableState at_roll = AdvanceTo(model, Options(), start, t_slide, &events);
     const double s = u0 > 0 ? 1.0 : -1.0;
     const double x = c.v0 * t_slide - 0.5 * s * mu_s * g * t_slide * t_slide;
     EXPECT_NEAR(at_roll.balls[0].r.head<2>().dot(d), x,
-                PositionTol(integrator(), {{mu_s * g, t_slide}}));
+                PosTol({{mu_s * g, t_slide}}));
   }
 }
 
@@ -395,7 +431,7 @@ TEST_P(ClosedFormTest, NaturalRollAtBFourTenthsNeverSlides) {
         model, 0, {.speed_mps = 2.0, .phi_rad = DegToRad(phi_deg), .b = 0.4}, 0, &table));
     EXPECT_EQ(table.balls[0].state, MotionState::kRolling);
     EXPECT_LT(Slip(out.v, out.w, model.radius()).norm(), kRestSlip);
-    absl::StatusOr<ShotResult> shot = SimulateShot(model, Solver(integrator()), table, {});
+    absl::StatusOr<ShotResult> shot = SimulateShot(model, Options(), table, {});
     ASSERT_TRUE(shot.ok()) << shot.status();
     for (const Event& e : shot->events) {
       EXPECT_NE(e.from, MotionState::kSliding) << "t = " << e.t_s;
@@ -404,7 +440,7 @@ TEST_P(ClosedFormTest, NaturalRollAtBFourTenthsNeverSlides) {
     // It rolls to rest after v / (mu_r g).
     const double v = out.v.head<2>().norm();
     EXPECT_NEAR(shot->t_rest_s, v / (model.params().mu_roll * model.params().gravity_mps2),
-                kTimeTolS);
+                TimeTol());
   }
 }
 
@@ -429,9 +465,9 @@ TEST_P(ClosedFormTest, StraightStunHitSharesTheSpeedByRestitution) {
     // Euler schemes reach the ball early or late by their position error / v_hit, which
     // changes the speed at impact by a times that (first order; the next term is a relative
     // a dt_hit / v_hit ~ 1e-5 of it, ~2e-10 m/s, inside the rounding terms).
-    const double v_tol = kVelTolMps + a * PositionTol(integrator(), {{a, t_hit}}) / v_hit;
+    const double v_tol = kVelTolMps + a * PosTol({{a, t_hit}}) / v_hit;
     std::vector<Event> events;
-    AdvanceTo(model, Solver(integrator()), start, 0.5, &events);
+    AdvanceTo(model, Options(), start, 0.5, &events);
     const Event* hit = FindBallBall(events, 0, 1);
     ASSERT_NE(hit, nullptr);
     EXPECT_NEAR(hit->va.x(), 0.5 * (1.0 - e) * v_hit, v_tol);
@@ -476,7 +512,7 @@ TEST_P(ClosedFormTest, StunCutNinetyDegreeRuleAndRestitutionCorrection) {
       const double alpha = DegToRad(alpha_deg);
       const TableState start = CutShot(model, alpha, 0.2, {2.0, 0.0, 0.0});
       std::vector<Event> events;
-      AdvanceTo(model, Solver(integrator(), kEffectBallFriction), start, 0.3, &events);
+      AdvanceTo(model, Options(kEffectBallFriction), start, 0.3, &events);
       const Event* hit = FindBallBall(events, 0, 1);
       ASSERT_NE(hit, nullptr);
       const Eigen::Vector2d n(std::cos(alpha), -std::sin(alpha));
@@ -511,7 +547,7 @@ TEST_P(ClosedFormTest, RollingCueBallThirtyDegreeRule) {
     const TableState start = CutShot(model, alpha, 0.3, v, RollingSpin(v, radius));
     ASSERT_EQ(start.balls[0].state, MotionState::kRolling);
     std::vector<Event> events;
-    AdvanceTo(model, Solver(integrator(), kEffectBallFriction), start, 1.0, &events);
+    AdvanceTo(model, Options(kEffectBallFriction), start, 1.0, &events);
     const Event* hit = FindBallBall(events, 0, 1);
     ASSERT_NE(hit, nullptr);
     const Event* rolls_again =
@@ -569,10 +605,10 @@ TEST_P(ClosedFormTest, StunCutThrow) {
     const double alpha = DegToRad(alpha_deg);
     const TableState start = CutShot(model, alpha, 0.0, {v, 0.0, 0.0});
     std::vector<Event> events;
-    AdvanceTo(model, Solver(integrator()), start, 0.01, &events);
+    AdvanceTo(model, Options(), start, 0.01, &events);
     const Event* hit = FindBallBall(events, 0, 1);
     ASSERT_NE(hit, nullptr);
-    EXPECT_NEAR(hit->t_s, 0.0, kTimeTolS);
+    EXPECT_NEAR(hit->t_s, 0.0, TimeTol());
     const Eigen::Vector2d n(std::cos(alpha), -std::sin(alpha));
     const double got_deg = RadToDeg(AngleFromTo(n, hit->vb));  // > 0: towards the tangent
     const double expected_deg = ThrowDeg(p, alpha, v * std::sin(alpha));
@@ -595,7 +631,7 @@ TEST_P(ClosedFormTest, SlideToRollLosesTwoSeventhsOfTheEnergy) {
     // Without rolling resistance the energy is constant once the ball rolls.
     const double t_slide = 2.0 * v0 / (7.0 * p.mu_slide * p.gravity_mps2);
     std::vector<Event> events;
-    const TableState end = AdvanceTo(model, Solver(integrator(), kEffectRollingResistance),
+    const TableState end = AdvanceTo(model, Options(kEffectRollingResistance),
                                      start, 2.0 * t_slide, &events);
     ASSERT_EQ(end.balls[0].state, MotionState::kRolling);
     EXPECT_NEAR(KineticEnergy(model, end.balls[0]), 5.0 / 7.0 * e0, kEnergyRel * e0)
@@ -626,11 +662,11 @@ TEST_P(ClosedFormTest, BallBallCollisionsConserveMomentum) {
         MakeBall(model, "a", c1 - t_contact * v1.head<2>(), v1, RollingSpin(v1, radius)),
         MakeBall(model, "b", c2 - t_contact * v2.head<2>(), v2, RollingSpin(v2, radius))}};
     std::vector<Event> events;
-    AdvanceTo(model, Solver(integrator(), kEffectRollingResistance | kEffectSpinDecay), start,
+    AdvanceTo(model, Options(kEffectRollingResistance | kEffectSpinDecay), start,
               t_contact + 0.01, &events);
     const Event* hit = FindBallBall(events, 0, 1);
     ASSERT_NE(hit, nullptr) << "trial " << trial;
-    EXPECT_NEAR(hit->t_s, t_contact, kTimeTolS);
+    EXPECT_NEAR(hit->t_s, t_contact, TimeTol());
     const Eigen::Vector2d before = (v1 + v2).head<2>();
     const Eigen::Vector2d after = hit->va + hit->vb;
     EXPECT_NEAR((after - before).norm(), 0.0, kVelTolMps) << "trial " << trial;
@@ -705,7 +741,7 @@ TEST_P(ClosedFormTest, KineticEnergyNeverIncreasesAcrossEvents) {
   ASSERT_TRUE(ValidateLayout(model, table).ok());
   const double e0 = TotalKineticEnergy(model, table);
   const double tol = kEnergyRel * e0;
-  const SolverOptions options = Solver(integrator());
+  const SolverOptions options = Options();
   constexpr double kAround = 1e-9;  // s either side of an event: dissipates < 1e-8 J here
   std::vector<Event> events;
   int64_t ball_ball = 0, steps = 0;
@@ -741,7 +777,7 @@ TEST_P(ClosedFormTest, KineticEnergyNeverIncreasesAcrossEvents) {
   EXPECT_TRUE(table.AtRest());
   EXPECT_GT(ball_ball, 5) << "the shot should be busy";
   std::printf("%s: %lld steps, %lld ball-ball events, rest at %.3f s\n",
-              std::string(IntegratorName(integrator())).c_str(), static_cast<long long>(steps),
+              SchemeName().c_str(), static_cast<long long>(steps),
               static_cast<long long>(ball_ball), table.t_s);
 }
 
@@ -772,7 +808,7 @@ TEST_P(ClosedFormTest, MirrorCushionKeepsAngleAndSpeed) {
         const TableState start{.balls = {
             MakeBall(model, "cue", t.contact - 0.25 * v_in, v, RollingSpin(v, radius))}};
         std::vector<Event> events;
-        AdvanceTo(model, Solver(integrator(), kEffectRollingResistance | kEffectSpinDecay),
+        AdvanceTo(model, Options(kEffectRollingResistance | kEffectSpinDecay),
                   start, 0.26, &events);
         const Event* bounce = nullptr;
         for (const Event& e : events) {
@@ -782,7 +818,7 @@ TEST_P(ClosedFormTest, MirrorCushionKeepsAngleAndSpeed) {
           }
         }
         ASSERT_NE(bounce, nullptr);
-        EXPECT_NEAR(bounce->t_s, 0.25, kTimeTolS);
+        EXPECT_NEAR(bounce->t_s, 0.25, TimeTol());
         EXPECT_NEAR(bounce->va.norm(), v_in.norm(), kVelTolMps);  // speed kept
         EXPECT_NEAR(bounce->va.dot(t.normal), -v_in.dot(t.normal), kVelTolMps);
         EXPECT_NEAR(bounce->va.dot(along), v_in.dot(along), kVelTolMps);
@@ -809,7 +845,7 @@ TEST_P(ClosedFormTest, ChapterDemonstrationScene) {
   table.balls[cue].v = {7.0, 0.0, 0.0};
   table.balls[cue].state = Classify(model, table.balls[cue]);
   std::vector<Event> events;
-  AdvanceTo(model, Solver(integrator()), table, 1.0, &events);
+  AdvanceTo(model, Options(), table, 1.0, &events);
   const Event* cue_eight = FindBallBall(events, cue, eight);
   const Event* eight_one = FindBallBall(events, eight, one);
   const Event* eight_two = FindBallBall(events, eight, two);
@@ -825,7 +861,7 @@ TEST_P(ClosedFormTest, ChapterDemonstrationScene) {
   const Event* last = std::max(eight_one, eight_two);  // the later in the event list
   const Eigen::Vector2d v8 = v_of(last, eight);
   std::printf("%s: cue-8 at %.4f s; 8 after both %.3f m/s; '1' (%.3f, %.3f), '2' (%.3f, %.3f)\n",
-              std::string(IntegratorName(integrator())).c_str(), cue_eight->t_s, v8.norm(),
+              SchemeName().c_str(), cue_eight->t_s, v8.norm(),
               v1.x(), v1.y(), v2.x(), v2.y());
   // Diagonally off: '1' (below the axis) down and forward, '2' up and forward.
   EXPECT_GT(v1.x(), 0.0);
@@ -844,9 +880,11 @@ TEST_P(ClosedFormTest, ChapterDemonstrationScene) {
   EXPECT_LT(v8.norm(), v2.norm() / 3.0);
 }
 
-INSTANTIATE_TEST_SUITE_P(AllIntegrators, ClosedFormTest,
-                         ::testing::Values(Integrator::kEuler, Integrator::kSemiImplicitEuler,
-                                           Integrator::kRk4),
+INSTANTIATE_TEST_SUITE_P(AllEngines, ClosedFormTest,
+                         ::testing::Values(Scheme{Engine::kEvent, Integrator::kRk4},
+                                           Scheme{Engine::kStepped, Integrator::kEuler},
+                                           Scheme{Engine::kStepped, Integrator::kSemiImplicitEuler},
+                                           Scheme{Engine::kStepped, Integrator::kRk4}),
                          Name);
 
 }  // namespace

@@ -78,7 +78,7 @@ TEST(SteppedEngineTest, CcdStopsTunnellingAt13MpsAndOneTwentiethSecondSteps) {
     s.balls[0].v = Eigen::Vector3d(13.0, 0.0, 0.0);
     s.balls[0].w = Eigen::Vector3d(0.0, 13.0 / r, 0.0);  // rolling: no curve, no slide
     for (bool ccd : {true, false}) {
-      SolverOptions o{.integrator = Integrator::kRk4, .dt_s = 1.0 / 120.0, .ccd = ccd};
+      SolverOptions o{.engine = Engine::kStepped, .integrator = Integrator::kRk4, .dt_s = 1.0 / 120.0, .ccd = ccd};
       absl::StatusOr<ShotResult> out = SimulateShot(m, o, s, {.max_time_s = 0.2});
       ASSERT_TRUE(out.ok()) << out.status();
       const int hits = Count(out->events, EventKind::kBallBall);
@@ -118,7 +118,8 @@ TEST(SteppedEngineTest, InvariantsOverRandomShotsOnEveryPreset) {
                              .theta_rad = DegToRad(20.0 * unit(rng)),
                              .a = 0.6 * (unit(rng) - 0.5),
                              .b = 0.6 * (unit(rng) - 0.5)};
-      const SolverOptions o{.integrator = static_cast<Integrator>(i % 3), .dt_s = 1.0 / 480.0};
+      const SolverOptions o{.engine = Engine::kStepped,
+                            .integrator = static_cast<Integrator>(i % 3), .dt_s = 1.0 / 480.0};
       ASSERT_TRUE(ApplyStrike(m, o.disabled, strike, s.Find("cue"), &s).ok());
       // Unbounded runs can roll far: stop them after 20 s.
       absl::StatusOr<ShotResult> out =
@@ -170,7 +171,7 @@ TEST(SteppedEngineTest, SameShotTwiceIsBitIdentical) {
     absl::StatusOr<std::vector<Ball>> balls = MakeRack("8ball", m, 0.0002, 7);
     ASSERT_TRUE(balls.ok());
     TableState s{.balls = *balls};
-    const SolverOptions o{.integrator = integ};
+    const SolverOptions o{.engine = Engine::kStepped, .integrator = integ};
     ASSERT_TRUE(ApplyStrike(m, o.disabled, {.speed_mps = 8.0, .phi_rad = 0.01, .a = 0.1},
                             s.Find("cue"), &s)
                     .ok());
@@ -192,7 +193,7 @@ TEST(SteppedEngineTest, SameShotTwiceIsBitIdentical) {
 TEST(SteppedEngineTest, ChunkedAdvanceMatchesOneAdvanceAndRestingBallsDoNotMove) {
   const TableModel m = Model("pool-9ft");
   TableState s{.balls = {BallAt("cue", -0.8, 0.0, m), BallAt("1", 0.9, 0.5, m)}};
-  const SolverOptions o{.integrator = Integrator::kSemiImplicitEuler, .dt_s = 1.0 / 960.0};
+  const SolverOptions o{.engine = Engine::kStepped, .integrator = Integrator::kSemiImplicitEuler, .dt_s = 1.0 / 960.0};
   ASSERT_TRUE(ApplyStrike(m, o.disabled, {.speed_mps = 3.0, .phi_rad = DegToRad(-20.0), .b = 0.3},
                           0, &s)
                   .ok());
@@ -216,7 +217,7 @@ TEST(SteppedEngineTest, TransitionsHappenOnceWithoutChatter) {
     TableState s{.balls = {BallAt("cue", 0, 0, m)}};
     s.balls[0].v = Eigen::Vector3d(2.0, 1.0, 0.0);
     s.balls[0].w = Eigen::Vector3d(0.0, 0.0, 5.0);
-    absl::StatusOr<ShotResult> out = SimulateShot(m, {.dt_s = dt}, s, {});
+    absl::StatusOr<ShotResult> out = SimulateShot(m, {.engine = Engine::kStepped, .dt_s = dt}, s, {});
     ASSERT_TRUE(out.ok()) << out.status();
     ASSERT_TRUE(out->at_rest);
     std::vector<std::pair<MotionState, MotionState>> seen;
@@ -328,7 +329,7 @@ TEST(SteppedEngineTest, DragOnARollingBallMatchesItsClosedFormAndTheEventEngineR
   const double a = p.mu_roll * p.gravity_mps2, b = 5.0 / 7.0 * k;
   const double expected = std::log(1 + b * v0 * v0 / a) / (2 * b);
   absl::StatusOr<ShotResult> plain = SimulateShot(m, {}, s, {});
-  absl::StatusOr<ShotResult> drag = SimulateShot(m, {.dt_s = 1e-3, .disabled = 0}, s, {});
+  absl::StatusOr<ShotResult> drag = SimulateShot(m, {.engine = Engine::kStepped, .dt_s = 1e-3, .disabled = 0}, s, {});
   ASSERT_TRUE(plain.ok() && drag.ok());
   // rk4 at 1 ms on a smooth law: far below 1e-6 m; the stop is found by re-predicting until
   // the remaining time is under 1e-9 s.

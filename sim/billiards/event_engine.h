@@ -1,0 +1,40 @@
+// The event engine (internal; use TableSimulation::Create from engine.h).
+//
+// Between events every ball follows a closed-form trajectory of its motion state (cloth.h):
+// r(t) = r0 + v0 tau + a tau^2 / 2 and w(t) = w0 + alpha tau with constant a and alpha (no air
+// drag), tau = t - t0 since the ball's last event. Events are predicted as roots of polynomials
+// in time (poly_roots.h): ball-ball contact |dr(t)| = 2R (quartic), a cushion line (quadratic)
+// or its rounded ends (quartic), pocket capture (quartic), leaving the table (quadratic), and
+// transitions (closed form, cloth.h). See docs/billiards.md, "The event engine".
+#ifndef SPORTSIM_SIM_BILLIARDS_EVENT_ENGINE_H_
+#define SPORTSIM_SIM_BILLIARDS_EVENT_ENGINE_H_
+
+#include <memory>
+#include <vector>
+
+#include "sim/billiards/engine.h"
+
+namespace sportsim::billiards {
+
+/// After a plastic (resting) contact the balls are set this far apart (m), so that a contact
+/// that a ball's spin keeps pushing closed re-forms after sqrt(2 gap / a) (70 us at 4 m/s^2)
+/// with an approach speed sqrt(2 a gap) (0.3 mm/s) that is again below kRestingContactSpeed:
+/// the push is resolved as a train of plastic hops instead of a Zeno cascade.
+inline constexpr double kRestingGap = 1e-8;
+
+/// Predictions look at most this far ahead (s); a ball with nothing predicted within it is
+/// re-predicted then (only an unbounded table without rolling resistance gets there).
+inline constexpr double kPredictionHorizon = 1000.0;
+
+/// Orientation of a ball whose spin axis turns (sliding, or rolling with side spin) is
+/// integrated in pieces of this length (s), 4th-order Magnus per piece, on a grid anchored at
+/// the ball's last event (so evaluating at any times gives the same values).
+inline constexpr double kOrientationPiece = 1.0 / 512.0;
+
+std::unique_ptr<TableSimulation> MakeEventSimulation(const TableModel& model,
+                                                     const SolverOptions& options,
+                                                     TableState initial);
+
+}  // namespace sportsim::billiards
+
+#endif  // SPORTSIM_SIM_BILLIARDS_EVENT_ENGINE_H_

@@ -1,0 +1,117 @@
+#include "sim/core/poly_roots.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace sportsim {
+namespace {
+
+// p and p' at x.
+void EvalWithDerivative(const double* c, int degree, double x, double* p, double* dp) {
+  double f = c[degree];
+  double d = 0.0;
+  for (int k = degree - 1; k >= 0; --k) {
+    d = d * x + f;
+    f = f * x + c[k];
+  }
+  *p = f;
+  *dp = d;
+}
+
+// The root of p in [a, b], where p is monotone and p(a), p(b) have opposite signs.
+double Refine(const double* c, int degree, double a, double b, double fa) {
+  // Keep lo on the side where p has the sign of p(a).
+  double lo = a, hi = b;
+  const bool neg_at_lo = fa < 0;
+  double x = 0.5 * (lo + hi);
+  for (int it = 0; it < 200; ++it) {
+    double f, df;
+    EvalWithDerivative(c, degree, x, &f, &df);
+    if (f == 0.0) return x;
+    if ((f < 0) == neg_at_lo) {
+      lo = x;
+    } else {
+      hi = x;
+    }
+    double next = df != 0.0 ? x - f / df : 0.5 * (lo + hi);
+    const double l = std::min(lo, hi), h = std::max(lo, hi);
+    if (!(next > l && next < h)) next = 0.5 * (lo + hi);  // Newton left the bracket: bisect
+    // Converged when the step is at rounding level or the bracket has no room left.
+    if (std::abs(next - x) <= 4.0 * std::numeric_limits<double>::epsilon() * std::abs(x) ||
+        next == l || next == h) {
+      return next;
+    }
+    x = next;
+  }
+  return x;
+}
+
+int Degree(const double* c, int degree) {
+  while (degree > 0 && c[degree] == 0.0) --degree;
+  return degree;
+}
+
+// Breakpoints lo = x_0 < ... < x_m = hi between which p (of exact degree >= 1) is monotone.
+int MonotonePieces(const double* c, int degree, double lo, double hi, double* x) {
+  int m = 0;
+  x[m++] = lo;
+  if (degree >= 2) {
+    double d[kMaxPolyDegree];
+    for (int k = 1; k <= degree; ++k) d[k - 1] = k * c[k];
+    double crit[kMaxPolyDegree];
+    const int nc = PolyRootsIn(d, degree - 1, lo, hi, crit);
+    for (int k = 0; k < nc; ++k) {
+      if (crit[k] > x[m - 1] && crit[k] < hi) x[m++] = crit[k];
+    }
+  }
+  x[m++] = hi;
+  return m;
+}
+
+}  // namespace
+
+double PolyEval(const double* c, int degree, double x) {
+  double f = c[degree];
+  for (int k = degree - 1; k >= 0; --k) f = f * x + c[k];
+  return f;
+}
+
+int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots) {
+  degree = Degree(c, degree);
+  if (degree == 0 || !(lo <= hi)) return 0;
+  double x[kMaxPolyDegree + 1];
+  const int m = MonotonePieces(c, degree, lo, hi, x);
+  int n = 0;
+  double fa = PolyEval(c, degree, x[0]);
+  if (fa == 0.0) roots[n++] = x[0];
+  for (int k = 1; k < m; ++k) {
+    const double fb = PolyEval(c, degree, x[k]);
+    if (fb == 0.0) {
+      if (n == 0 || roots[n - 1] != x[k]) roots[n++] = x[k];
+    } else if (fa != 0.0 && (fa < 0) != (fb < 0)) {
+      roots[n++] = Refine(c, degree, x[k - 1], x[k], fa);
+    }
+    fa = fb;
+  }
+  return n;
+}
+
+double FirstDownCrossing(const double* c, int degree, double lo, double hi) {
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  degree = Degree(c, degree);
+  if (degree == 0 || !(lo <= hi)) return kNever;
+  double x[kMaxPolyDegree + 1];
+  const int m = MonotonePieces(c, degree, lo, hi, x);
+  double fa = PolyEval(c, degree, x[0]);
+  for (int k = 1; k < m; ++k) {
+    const double fb = PolyEval(c, degree, x[k]);
+    if (fa > 0.0 && fb <= 0.0) {
+      return fb == 0.0 ? x[k] : Refine(c, degree, x[k - 1], x[k], fa);
+    }
+    fa = fb;
+  }
+  return kNever;
+}
+
+}  // namespace sportsim

@@ -1,0 +1,32 @@
+// Real roots of low-degree polynomials on an interval, for event prediction (collision times are
+// roots of quadratics and quartics in time).
+//
+// Method: the roots of p' split [lo, hi] into pieces on which p is monotone (found the same way,
+// recursively, down to degree 1), and each piece with a sign change holds exactly one root,
+// refined by Newton's method kept inside the bracket by bisection. No closed-form cubic or
+// quartic formulas (they lose digits exactly where contacts are delicate: grazing, touching,
+// equal accelerations), and degenerate degrees need no special case: a zero leading coefficient
+// just lowers the degree, a tiny one puts extra critical points far outside the interval.
+#ifndef SPORTSIM_SIM_CORE_POLY_ROOTS_H_
+#define SPORTSIM_SIM_CORE_POLY_ROOTS_H_
+
+namespace sportsim {
+
+inline constexpr int kMaxPolyDegree = 4;
+
+/// p(x) = c[0] + c[1] x + ... + c[degree] x^degree, by Horner's rule.
+double PolyEval(const double* c, int degree, double x);
+
+/// The real roots of p in [lo, hi] (finite, lo <= hi), ascending, written to `roots` (room for
+/// `degree` values); returns how many. A root of even multiplicity counts when p reaches exactly
+/// zero there in floating point. degree <= kMaxPolyDegree.
+int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots);
+
+/// The first x in [lo, hi] at which p passes from positive to <= 0 (a downward crossing: for
+/// p = |gap vector|^2 - d^2, the first approaching contact), or +infinity. When p(lo) <= 0 the
+/// search starts after p has become positive again. degree <= kMaxPolyDegree.
+double FirstDownCrossing(const double* c, int degree, double lo, double hi);
+
+}  // namespace sportsim
+
+#endif  // SPORTSIM_SIM_CORE_POLY_ROOTS_H_
