@@ -1,6 +1,7 @@
 #include "sim/billiards/event_engine.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -110,6 +111,7 @@ class EventSimulation final : public TableSimulation {
         n_(static_cast<int>(state_.balls.size())),
         traj_(state_.balls.size()),
         best_(state_.balls.size()),
+        resting_(state_.balls.size()),
         t_(state_.t_s),
         d_(2.0 * model.radius()),
         dc_(model.cushion_contact_distance()),
@@ -308,8 +310,20 @@ class EventSimulation final : public TableSimulation {
     }
     const double c[5] = {gap * (dist + d_), 2.0 * dv.dot(dp), dv.squaredNorm() + da.dot(dp),
                          da.dot(dv), 0.25 * da.squaredNorm()};
-    const double s = FirstDownCrossing(c, 4, 0.0, S);
-    if (s < kNever) p.t = t_ + s;
+    double s = FirstDownCrossing(c, 4, 0.0, S);
+    if (s == kNever) return p;
+    // Polish on the distance itself: the squared form loses digits when the contact is
+    // glancing (its slope 2 dr.dv is small against |dr|^2); |dr| - d does not.
+    for (int it = 0; it < 2; ++it) {
+      const Eigen::Vector2d r = dp + s * (dv + (0.5 * s) * da);
+      const double rn = r.norm();
+      const double slope = r.dot(dv + s * da) / rn;
+      if (!(slope < 0.0)) break;
+      const double next = s - (rn - d_) / slope;
+      if (!(std::abs(next - s) <= 1e-9 * (s + 1e-6)) || next < 0.0 || next > S) break;
+      s = next;
+    }
+    p.t = t_ + s;
     return p;
   }
 
@@ -527,15 +541,41 @@ class EventSimulation final : public TableSimulation {
     return absl::OkStatus();
   }
 
+  // A contact of ball i with `partner`: true when it should be reported (not a hop of a push
+  // already reported).
+  bool Report(int i, int partner, bool plastic) {
+    std::array<Resting, 4>& ring = resting_[i];
+    if (!plastic) {
+      ring.fill(Resting{});  // a real collision ends every push on the ball
+      return true;
+    }
+    Resting* oldest = &ring[0];
+    for (Resting& r : ring) {
+      if (r.partner == partner) {
+        const bool continues = t_ - r.t <= kRestingTrain;
+        r.t = t_;
+        return !continues;
+      }
+      if (r.t < oldest->t) oldest = &r;
+    }
+    *oldest = {partner, t_};
+    return true;
+  }
+
   void HandleBalls(int ia, int ib, std::vector<Event>* events) {
     Ball& a = scratch_a_;
     Ball& b = scratch_b_;
     Eval(ia, t_, &a);
     Eval(ib, t_, &b);
     const MotionState fa = a.state, fb = b.state;
+    const Eigen::Vector2d n0 = (b.r - a.r).head<2>().normalized();
+    const bool plastic = (a.v - b.v).head<2>().dot(n0) < kRestingContactSpeed;
     if (CollideBalls(model_, o_.disabled, &a, &b)) {
-      events->push_back({.t_s = t_, .kind = EventKind::kBallBall, .a = ia, .b = ib,
-                         .va = a.v.head<2>(), .vb = b.v.head<2>()});
+      const bool ra = Report(ia, ib, plastic), rb = Report(ib, ia, plastic);
+      if (ra || rb) {
+        events->push_back({.t_s = t_, .kind = EventKind::kBallBall, .a = ia, .b = ib,
+                           .va = a.v.head<2>(), .vb = b.v.head<2>()});
+      }
     }
     // A plastic (resting) contact, or a push with nothing to resolve: open a resting gap so
     // that the contact, if the cloth keeps closing it, re-forms later instead of at once.
@@ -573,7 +613,8 @@ class EventSimulation final : public TableSimulation {
     const MotionState from = a.state;
     if (dist > 0.0) {
       const Eigen::Vector2d n = off / dist;
-      if (CollideCushion(model_, n, &a)) {
+      const bool plastic = -a.v.head<2>().dot(n) < kRestingContactSpeed;
+      if (CollideCushion(model_, n, &a) && Report(ia, -2 - k, plastic)) {
         events->push_back({.t_s = t_, .kind = EventKind::kBallCushion, .a = ia, .other = k,
                            .va = a.v.head<2>()});
       }
@@ -612,6 +653,13 @@ class EventSimulation final : public TableSimulation {
   bool dirty_ = true;
   int64_t processed_ = 0;
   Ball scratch_a_, scratch_b_;
+  // Per ball, the latest plastic contacts: partner (a ball index, or -2 - segment for a
+  // cushion) and time, to report a push once rather than every hop.
+  struct Resting {
+    int partner = -1;
+    double t = -kNever;
+  };
+  std::vector<std::array<Resting, 4>> resting_;
   const double d_;   // contact distance of two balls (m)
   const double dc_;  // contact distance from a cushion nose line (m)
   const bool cushions_, pockets_, orientation_;

@@ -17,10 +17,15 @@
 namespace sportsim::billiards {
 
 /// After a plastic (resting) contact the balls are set this far apart (m), so that a contact
-/// that a ball's spin keeps pushing closed re-forms after sqrt(2 gap / a) (70 us at 4 m/s^2)
-/// with an approach speed sqrt(2 a gap) (0.3 mm/s) that is again below kRestingContactSpeed:
-/// the push is resolved as a train of plastic hops instead of a Zeno cascade.
-inline constexpr double kRestingGap = 1e-8;
+/// that a ball's spin keeps pushing closed re-forms after sqrt(2 gap / a) (0.2 ms at 4 m/s^2,
+/// the most two sliding balls can close at) with an approach speed sqrt(2 a gap) <= 0.9 mm/s,
+/// again below kRestingContactSpeed: the push is resolved as a train of plastic hops instead of
+/// a Zeno cascade. 0.1 um moves nothing anyone can see.
+inline constexpr double kRestingGap = 1e-7;
+
+/// A plastic contact between the same two bodies within this time (s) of the previous one
+/// continues a push (a train of hops) and is not reported again; the first one is.
+inline constexpr double kRestingTrain = 0.01;
 
 /// Predictions look at most this far ahead (s); a ball with nothing predicted within it is
 /// re-predicted then (only an unbounded table without rolling resistance gets there).

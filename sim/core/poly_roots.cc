@@ -85,10 +85,12 @@ int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots
   int n = 0;
   double fa = PolyEval(c, degree, x[0]);
   if (fa == 0.0) roots[n++] = x[0];
-  for (int k = 1; k < m; ++k) {
+  for (int k = 1; k < m && n < degree; ++k) {
     const double fb = PolyEval(c, degree, x[k]);
     if (fb == 0.0) {
-      if (n == 0 || roots[n - 1] != x[k]) roots[n++] = x[k];
+      // Near a multiple root p can round to exactly zero over a stretch: breakpoints in a row
+      // with p == 0 are one root (the first of them), so there are never more than `degree`.
+      if (fa != 0.0) roots[n++] = x[k];
     } else if (fa != 0.0 && (fa < 0) != (fb < 0)) {
       roots[n++] = Refine(c, degree, x[k - 1], x[k], fa);
     }

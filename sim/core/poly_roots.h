@@ -19,7 +19,8 @@ double PolyEval(const double* c, int degree, double x);
 
 /// The real roots of p in [lo, hi] (finite, lo <= hi), ascending, written to `roots` (room for
 /// `degree` values); returns how many. A root of even multiplicity counts when p reaches exactly
-/// zero there in floating point. degree <= kMaxPolyDegree.
+/// zero there in floating point; a stretch where p rounds to exactly zero counts once.
+/// degree <= kMaxPolyDegree.
 int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots);
 
 /// The first x in [lo, hi] at which p passes from positive to <= 0 (a downward crossing: for
