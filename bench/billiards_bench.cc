@@ -1,8 +1,12 @@
-// Google Benchmark: one shot to rest with the stepped engine, per scene and integrator at the
-// default step (1/960 s), the 8-ball break at game steps, and the same break with effects
-// switched off or on (orientation tracking off; drag on). Reports shots per second. (Spin decay
-// off is not benchmarked: a ball with side spin then never comes to rest.)
+// Google Benchmark: one shot to rest per scene with the event engine and with the stepped engine
+// per integrator at the default step (1/960 s); the 8-ball break (16 balls, 8 m/s) with the
+// event engine and at game steps with the stepped one, with effects switched off or on
+// (orientation tracking off; drag on, stepped only); and a batch of random shots with the event
+// engine (what a bot needs). Reports shots per second and events per shot. (Spin decay off is
+// not benchmarked: a ball with side spin then never comes to rest.)
 #include <benchmark/benchmark.h>
+
+#include <random>
 
 #include "absl/strings/str_format.h"
 #include "bench/billiards_scenes.h"
@@ -13,40 +17,99 @@ namespace {
 
 const char* const kScenes[] = {"straight", "cut", "bank", "break"};
 
+// Scheme 0..2: stepped engine with that integrator; 3: the event engine.
+SolverOptions Scheme(int64_t k) {
+  if (k == 3) return {.engine = Engine::kEvent};
+  return {.engine = Engine::kStepped, .integrator = static_cast<Integrator>(k),
+          .dt_s = 1.0 / 960.0};
+}
+std::string SchemeName(const SolverOptions& o) {
+  return o.engine == Engine::kEvent ? "event" : "stepped " + std::string(IntegratorName(o.integrator));
+}
+
 void BM_ShotToRest(benchmark::State& state) {
   const Scene scene = MakeScene(kScenes[state.range(0)]);
-  const auto integ = static_cast<Integrator>(state.range(1));
-  const SolverOptions o{.integrator = integ, .dt_s = 1.0 / 960.0};
-  state.SetLabel(scene.name + "/" + std::string(IntegratorName(integ)));
-  for (auto _ : state) {
-    absl::StatusOr<ShotResult> r = SimulateShot(scene.model, o, scene.state, {});
-    benchmark::DoNotOptimize(r);
-  }
-  state.SetItemsProcessed(state.iterations());
-}
-BENCHMARK(BM_ShotToRest)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
-
-void BM_EightBallBreak(benchmark::State& state) {
-  TableModel m = *TableModel::Create(*MakeTablePreset("pool-9ft"));
-  TableState s{.balls = *MakeRack("8ball", m)};
-  if (!ApplyStrike(m, 0, {.speed_mps = 8.0, .ball_speed = true}, 0, &s).ok()) std::abort();
-  const double dt = 1.0 / static_cast<double>(state.range(0));
-  const uint32_t disabled = static_cast<uint32_t>(state.range(1));
-  state.SetLabel(absl::StrFormat("dt 1/%d, disabled 0x%x", state.range(0), disabled));
+  const SolverOptions o = Scheme(state.range(1));
+  state.SetLabel(scene.name + "/" + SchemeName(o));
   int64_t events = 0;
   for (auto _ : state) {
-    absl::StatusOr<ShotResult> r = SimulateShot(m, {.dt_s = dt, .disabled = disabled}, s, {});
+    absl::StatusOr<ShotResult> r = SimulateShot(scene.model, o, scene.state, {});
     events = static_cast<int64_t>(r->events.size());
     benchmark::DoNotOptimize(r);
   }
   state.counters["events"] = static_cast<double>(events);
   state.SetItemsProcessed(state.iterations());
 }
+BENCHMARK(BM_ShotToRest)->ArgsProduct({{0, 1, 2, 3}, {3, 0, 1, 2}})->Unit(benchmark::kMicrosecond);
+
+// range(0): 0 for the event engine, else the stepped engine's steps per second (rk4).
+void BM_EightBallBreak(benchmark::State& state) {
+  TableModel m = *TableModel::Create(*MakeTablePreset("pool-9ft"));
+  TableState s{.balls = *MakeRack("8ball", m)};
+  if (!ApplyStrike(m, 0, {.speed_mps = 8.0, .ball_speed = true}, 0, &s).ok()) std::abort();
+  const bool event = state.range(0) == 0;
+  const double dt = event ? 1.0 / 960.0 : 1.0 / static_cast<double>(state.range(0));
+  const uint32_t disabled = static_cast<uint32_t>(state.range(1));
+  const SolverOptions o{.engine = event ? Engine::kEvent : Engine::kStepped, .dt_s = dt,
+                        .disabled = disabled};
+  state.SetLabel(event ? absl::StrFormat("event, disabled 0x%x", disabled)
+                       : absl::StrFormat("stepped rk4 dt 1/%d, disabled 0x%x", state.range(0),
+                                         disabled));
+  int64_t events = 0;
+  for (auto _ : state) {
+    absl::StatusOr<ShotResult> r = SimulateShot(m, o, s, {});
+    events = static_cast<int64_t>(r->events.size());
+    benchmark::DoNotOptimize(r);
+  }
+  state.counters["events"] = static_cast<double>(events);
+  // Events per second of CPU: its inverse is the cost per event.
+  state.counters["events_rate"] = benchmark::Counter(
+      static_cast<double>(events), benchmark::Counter::kIsIterationInvariantRate);
+  state.SetItemsProcessed(state.iterations());
+}
 BENCHMARK(BM_EightBallBreak)
+    ->Args({0, kEffectDrag})
+    ->Args({0, kEffectDrag | kEffectOrientation})
     ->Args({120, kEffectDrag})
     ->Args({960, kEffectDrag})
     ->Args({960, kEffectDrag | kEffectOrientation})
     ->Args({960, 0})
+    ->Unit(benchmark::kMicrosecond);
+
+// A batch of 256 seeded random shots on a 9-ft table with a 9-ball rack (random speed 0.5-8
+// m/s, direction, elevation and tip offset), each to rest with the event engine: shots per
+// second per core is items_per_second.
+void BM_RandomShots(benchmark::State& state) {
+  TableModel m = *TableModel::Create(*MakeTablePreset("pool-9ft"));
+  std::vector<TableState> shots;
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  while (shots.size() < 256) {
+    TableState s{.balls = *MakeRack("9ball", m, 0.0005 * unit(rng), rng())};
+    const CueStrike strike{.speed_mps = 0.5 + 7.5 * unit(rng), .ball_speed = true,
+                           .phi_rad = 6.283185307179586 * unit(rng),
+                           .theta_rad = 0.2 * unit(rng), .a = 0.6 * (unit(rng) - 0.5),
+                           .b = 0.6 * (unit(rng) - 0.5)};
+    if (ApplyStrike(m, kEffectDrag, strike, s.Find("cue"), &s).ok()) shots.push_back(s);
+  }
+  const SolverOptions o{.engine = Engine::kEvent,
+                        .disabled = static_cast<uint32_t>(state.range(0))};
+  state.SetLabel(absl::StrFormat("event, disabled 0x%x", state.range(0)));
+  int64_t events = 0;
+  for (auto _ : state) {
+    events = 0;
+    for (const TableState& s : shots) {
+      absl::StatusOr<ShotResult> r = SimulateShot(m, o, s, {});
+      events += static_cast<int64_t>(r->events.size());
+      benchmark::DoNotOptimize(r);
+    }
+  }
+  state.counters["events_per_shot"] = static_cast<double>(events) / 256.0;
+  state.SetItemsProcessed(state.iterations() * 256);
+}
+BENCHMARK(BM_RandomShots)
+    ->Arg(kEffectDrag)
+    ->Arg(kEffectDrag | kEffectOrientation)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

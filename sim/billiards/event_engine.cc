@@ -63,7 +63,8 @@ struct Trajectory {
   TransitionKind next_kind = TransitionKind::kNone;
   uint32_t version = 0;
   bool fixed_axis = true;  // the spin axis does not turn: orientation in closed form
-  // Orientation at t0 + q_k * kOrientationPiece (a cache of a pure function of the segment).
+  // Orientation at t0 + q_k * q_piece (a cache of a pure function of the segment).
+  double q_piece = 0.0;
   int64_t q_k = 0;
   Eigen::Quaterniond q_cached = Eigen::Quaterniond::Identity();
 };
@@ -205,6 +206,12 @@ class EventSimulation final : public TableSimulation {
     }
     const double cross = tr.w0.cross(tr.alpha).norm();
     tr.fixed_axis = cross <= 1e-12 * tr.w0.norm() * tr.alpha.norm();
+    if (!tr.fixed_axis) {
+      // |w| is largest at an end of the segment (it is linear in time).
+      const double span = std::min(tr.t_next, t + kPredictionHorizon) - t;
+      const double w_max = std::max(tr.w0.norm(), (tr.w0 + span * tr.alpha).norm());
+      tr.q_piece = std::clamp(kOrientationTurn / w_max, 1.0 / 8192.0, 1.0 / 16.0);
+    }
     tr.q_k = 0;
     tr.q_cached = tr.q0;
     ++tr.version;
@@ -232,7 +239,7 @@ class EventSimulation final : public TableSimulation {
     }
     // w = w0 + alpha t turns: fourth-order Magnus per piece, Omega = h w(mid) +
     // (h^3 / 12) alpha x w0 (the commutator term of a linearly varying generator).
-    const double h = kOrientationPiece;
+    const double h = tr.q_piece;
     const Eigen::Vector3d twist = tr.alpha.cross(tr.w0) / 12.0;
     const auto piece = [&](double t1, double t2) {
       const double len = t2 - t1;

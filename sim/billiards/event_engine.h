@@ -32,9 +32,10 @@ inline constexpr double kRestingTrain = 0.01;
 inline constexpr double kPredictionHorizon = 1000.0;
 
 /// Orientation of a ball whose spin axis turns (sliding, or rolling with side spin) is
-/// integrated in pieces of this length (s), 4th-order Magnus per piece, on a grid anchored at
-/// the ball's last event (so evaluating at any times gives the same values).
-inline constexpr double kOrientationPiece = 1.0 / 512.0;
+/// integrated in pieces, 4th-order Magnus per piece, on a grid anchored at the ball's last event
+/// (so evaluating at any times gives the same values). A piece turns the ball by at most this
+/// angle (rad), so its length is set per segment from the largest |w| in it.
+inline constexpr double kOrientationTurn = 0.125;
 
 std::unique_ptr<TableSimulation> MakeEventSimulation(const TableModel& model,
                                                      const SolverOptions& options,
