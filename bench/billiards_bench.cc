@@ -17,14 +17,19 @@ namespace {
 
 const char* const kScenes[] = {"straight", "cut", "bank", "break"};
 
-// Scheme 0..2: stepped engine with that integrator; 3: the event engine.
+// Scheme 0..2: stepped engine with that integrator; 3: the event engine; 4: the event engine
+// without orientation tracking.
 SolverOptions Scheme(int64_t k) {
   if (k == 3) return {.engine = Engine::kEvent};
+  if (k == 4) return {.engine = Engine::kEvent, .disabled = kEffectDrag | kEffectOrientation};
   return {.engine = Engine::kStepped, .integrator = static_cast<Integrator>(k),
           .dt_s = 1.0 / 960.0};
 }
 std::string SchemeName(const SolverOptions& o) {
-  return o.engine == Engine::kEvent ? "event" : "stepped " + std::string(IntegratorName(o.integrator));
+  if (o.engine == Engine::kEvent) {
+    return (o.disabled & kEffectOrientation) != 0 ? "event, no orientation" : "event";
+  }
+  return "stepped " + std::string(IntegratorName(o.integrator));
 }
 
 void BM_ShotToRest(benchmark::State& state) {
@@ -40,7 +45,7 @@ void BM_ShotToRest(benchmark::State& state) {
   state.counters["events"] = static_cast<double>(events);
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_ShotToRest)->ArgsProduct({{0, 1, 2, 3}, {3, 0, 1, 2}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ShotToRest)->ArgsProduct({{0, 1, 2, 3}, {3, 4, 0, 1, 2}})->Unit(benchmark::kMicrosecond);
 
 // range(0): 0 for the event engine, else the stepped engine's steps per second (rk4).
 void BM_EightBallBreak(benchmark::State& state) {

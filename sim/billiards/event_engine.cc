@@ -75,6 +75,17 @@ Eigen::Quaterniond RotationFromVector(const Eigen::Vector3d& rot) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rot / angle));
 }
 
+// The same for the small rotations of orientation pieces (|rot| <= ~0.25 rad): exp of the
+// quaternion by its series, no trigonometry. For half-angle x <= 0.125 the first omitted terms
+// (x^10 / 10!, x^10 / 11!) are below 1e-15, so the result is unit to rounding.
+Eigen::Quaterniond SmallRotation(const Eigen::Vector3d& rot) {
+  const double x2 = 0.25 * rot.squaredNorm();  // (angle / 2)^2
+  if (x2 > 0.015625) return RotationFromVector(rot);
+  const double c = 1.0 - x2 / 2 * (1.0 - x2 / 12 * (1.0 - x2 / 30 * (1.0 - x2 / 56)));
+  const double s = 0.5 * (1.0 - x2 / 6 * (1.0 - x2 / 20 * (1.0 - x2 / 42 * (1.0 - x2 / 72))));
+  return Eigen::Quaterniond(c, s * rot.x(), s * rot.y(), s * rot.z());
+}
+
 // Axis-aligned box of a path p + v s + a s^2 / 2 over s in [0, S].
 struct Box {
   Eigen::Vector2d lo, hi;
@@ -243,8 +254,8 @@ class EventSimulation final : public TableSimulation {
     const Eigen::Vector3d twist = tr.alpha.cross(tr.w0) / 12.0;
     const auto piece = [&](double t1, double t2) {
       const double len = t2 - t1;
-      return RotationFromVector(len * (tr.w0 + (0.5 * (t1 + t2)) * tr.alpha) +
-                                (len * len * len) * twist);
+      return SmallRotation(len * (tr.w0 + (0.5 * (t1 + t2)) * tr.alpha) +
+                           (len * len * len) * twist);
     };
     const auto k = static_cast<int64_t>(std::floor(tau / h));
     if (k < tr.q_k) {
@@ -253,7 +264,7 @@ class EventSimulation final : public TableSimulation {
     }
     while (tr.q_k < k) {
       const double t1 = static_cast<double>(tr.q_k) * h;
-      tr.q_cached = (piece(t1, t1 + h) * tr.q_cached).normalized();
+      tr.q_cached = piece(t1, t1 + h) * tr.q_cached;  // unit to rounding: normalized below
       ++tr.q_k;
     }
     return (piece(static_cast<double>(k) * h, tau) * tr.q_cached).normalized();

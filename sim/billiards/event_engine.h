@@ -35,7 +35,7 @@ inline constexpr double kPredictionHorizon = 1000.0;
 /// integrated in pieces, 4th-order Magnus per piece, on a grid anchored at the ball's last event
 /// (so evaluating at any times gives the same values). A piece turns the ball by at most this
 /// angle (rad), so its length is set per segment from the largest |w| in it.
-inline constexpr double kOrientationTurn = 0.125;
+inline constexpr double kOrientationTurn = 0.25;
 
 std::unique_ptr<TableSimulation> MakeEventSimulation(const TableModel& model,
                                                      const SolverOptions& options,
