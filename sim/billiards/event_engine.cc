@@ -18,8 +18,17 @@ namespace {
 
 constexpr double kNever = std::numeric_limits<double>::infinity();
 // A gap below this (m) counts as touching: frozen balls, a ball frozen to a cushion, and the
-// rounding-level gaps a collision leaves. Half the resting gap, so separated pairs are not.
-constexpr double kTouchGap = 0.5 * kRestingGap;
+// rounding-level gaps a collision leaves. Half the smallest resting gap, so separated pairs
+// are not.
+constexpr double kTouchGap = 0.5 * kMinRestingGap;
+
+// The resting gap for a contact the cloth closes at `closing` m/s^2: re-forming from it, the
+// approach speed sqrt(2 closing gap) stays at 0.9 kRestingContactSpeed or below.
+double RestingGap(double closing) {
+  if (!(closing > 0.0)) return kRestingGap;
+  const double v = 0.9 * kRestingContactSpeed;
+  return std::clamp(v * v / (2.0 * closing), kMinRestingGap, kRestingGap);
+}
 
 // Kinds in tie-break order: at equal times collisions come first, then captures, then
 // transitions (the order of EventKind).
@@ -123,7 +132,6 @@ class EventSimulation final : public TableSimulation {
         n_(static_cast<int>(state_.balls.size())),
         traj_(state_.balls.size()),
         best_(state_.balls.size()),
-        resting_(state_.balls.size()),
         t_(state_.t_s),
         d_(2.0 * model.radius()),
         dc_(model.cushion_contact_distance()),
@@ -132,6 +140,7 @@ class EventSimulation final : public TableSimulation {
         orientation_((options.disabled & kEffectOrientation) == 0),
         half_(0.5 * model.spec().length_m + model.radius(),
               0.5 * model.spec().width_m + model.radius()) {
+    resting_.resize(state_.balls.size());
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
     for (int i = 0; i < n_; ++i) Predict(i);
   }
@@ -155,6 +164,7 @@ class EventSimulation final : public TableSimulation {
             e.b >= 0 ? " and ball " + state_.balls[e.b].id : std::string()));
       }
       t_ = e.t;
+      dirty_ = true;
       if (absl::Status s = Handle(e, events); !s.ok()) return s;
       if (heap_.size() > 8 * static_cast<size_t>(n_) + 64) Compact();
     }
@@ -326,8 +336,12 @@ class EventSimulation final : public TableSimulation {
         return p;
       }
     }
-    const double c[5] = {gap * (dist + d_), 2.0 * dv.dot(dp), dv.squaredNorm() + da.dot(dp),
-                         da.dot(dv), 0.25 * da.squaredNorm()};
+    // A touching or overlapping pair that is not handled now (moving apart) makes contact
+    // again when its distance falls below what it is now: a pair that starts overlapped and
+    // turns back before the overlap opens must not pass through.
+    const double d = gap < kTouchGap ? std::min(d_, dist) * (1.0 - 1e-12) : d_;
+    const double c[5] = {(dist - d) * (dist + d), 2.0 * dv.dot(dp),
+                         dv.squaredNorm() + da.dot(dp), da.dot(dv), 0.25 * da.squaredNorm()};
     double s = FirstDownCrossing(c, 4, 0.0, S);
     if (s == kNever) return p;
     // Polish on the distance itself: the squared form loses digits when the contact is
@@ -337,7 +351,7 @@ class EventSimulation final : public TableSimulation {
       const double rn = r.norm();
       const double slope = r.dot(dv + s * da) / rn;
       if (!(slope < 0.0)) break;
-      const double next = s - (rn - d_) / slope;
+      const double next = s - (rn - d) / slope;
       if (!(std::abs(next - s) <= 1e-9 * (s + 1e-6)) || next < 0.0 || next > S) break;
       s = next;
     }
@@ -351,6 +365,10 @@ class EventSimulation final : public TableSimulation {
     Pending p{.kind = Kind::kCushion, .a = i, .other = k, .va = traj_[i].version};
     const CushionSegment& seg = model_.spec().cushions[k];
     if (!Near(box, seg.a.cwiseMin(seg.b), seg.a.cwiseMax(seg.b), dc_)) return p;
+    const Eigen::Vector2d e = seg.b - seg.a;
+    const double len2 = e.squaredNorm();
+    const double lambda0 = len2 > 0.0 ? (P - seg.a).dot(e) / len2 : 0.0;
+    const bool at_end = lambda0 <= 0.0 || lambda0 >= 1.0;
     const Eigen::Vector2d near = ClosestOnSegment(seg.a, seg.b, P);
     const Eigen::Vector2d off = P - near;
     const double dist = off.norm();
@@ -363,7 +381,6 @@ class EventSimulation final : public TableSimulation {
         p.t = t_;
         return p;
       }
-      const bool at_end = near == seg.a || near == seg.b;
       const double closing =
           -A.dot(n) - (at_end ? (V.squaredNorm() - approach * approach) / dist : 0.0);
       if (approach > -kMinApproachSpeed && closing > 0.0) {
@@ -371,8 +388,9 @@ class EventSimulation final : public TableSimulation {
         return p;
       }
     }
-    const Eigen::Vector2d e = seg.b - seg.a;
-    const double len2 = e.squaredNorm();
+    // As for ball pairs: a ball touching or inside the contact distance and moving away makes
+    // contact again when its distance falls below what it is now.
+    const double dc = gap < kTouchGap ? std::min(dc_, dist) * (1.0 - 1e-12) : dc_;
     double best = kNever;
     if (len2 > 0.0) {
       // The line part from either side: |h(s)| = dc with |h| falling, h the signed distance,
@@ -380,7 +398,7 @@ class EventSimulation final : public TableSimulation {
       const Eigen::Vector2d nn = Eigen::Vector2d(-e.y(), e.x()) / std::sqrt(len2);
       const double h0 = nn.dot(P - seg.a), h1 = nn.dot(V), h2 = 0.5 * nn.dot(A);
       for (const double side : {1.0, -1.0}) {
-        const double c[3] = {side * h0 - dc_, side * h1, side * h2};
+        const double c[3] = {side * h0 - dc, side * h1, side * h2};
         const double s = FirstDownCrossing(c, 2, 0.0, S);
         if (s >= best) continue;
         const Eigen::Vector2d at = P + s * (V + 0.5 * s * A);
@@ -388,12 +406,14 @@ class EventSimulation final : public TableSimulation {
         if (lambda >= 0.0 && lambda <= 1.0) best = s;
       }
     }
-    // The rounded ends (the first touch of an end is never later than one of the line's).
+    // The rounded ends. The earliest of all these is the first contact: the distance to the
+    // segment is the distance to its line where the foot is on it, else to the nearer end.
     for (const Eigen::Vector2d& q : {seg.a, seg.b}) {
-      if (!Near(box, q, q, dc_)) continue;
+      if (!Near(box, q, q, dc)) continue;
       const Eigen::Vector2d D = P - q;
       const double dq = D.norm();
-      const double c[5] = {(dq - dc_) * (dq + dc_), 2.0 * V.dot(D), V.squaredNorm() + A.dot(D),
+      if (dq <= dc) continue;  // touching this end: handled above, or moving away from it
+      const double c[5] = {(dq - dc) * (dq + dc), 2.0 * V.dot(D), V.squaredNorm() + A.dot(D),
                            A.dot(V), 0.25 * A.squaredNorm()};
       best = std::min(best, FirstDownCrossing(c, 4, 0.0, std::min(S, best)));
     }
@@ -504,7 +524,7 @@ class EventSimulation final : public TableSimulation {
     return traj_[p.a].version == p.va && (p.b < 0 || traj_[p.b].version == p.vb);
   }
 
-  // After balls in `changed` got new trajectories: predict them again, and every ball whose
+  // After balls a (and b) got new trajectories: predict them again, and every ball whose
   // earliest event involved one of them.
   void Repredict(int a, int b = -1) {
     Predict(a);
@@ -595,29 +615,32 @@ class EventSimulation final : public TableSimulation {
                            .va = a.v.head<2>(), .vb = b.v.head<2>()});
       }
     }
-    // A plastic (resting) contact, or a push with nothing to resolve: open a resting gap so
-    // that the contact, if the cloth keeps closing it, re-forms later instead of at once.
-    Eigen::Vector2d dp = (b.r - a.r).head<2>();
-    const double dist = dp.norm();
-    if (dist > 0.0 && dist < d_ + kRestingGap) {
-      const Eigen::Vector2d n = dp / dist;
-      if ((b.v - a.v).head<2>().dot(n) < kRestingContactSpeed) {
-        const double open = d_ + kRestingGap - dist;
-        const bool ma = IsTranslating(a.state), mb = IsTranslating(b.state);
-        if (ma && mb) {
-          a.r.head<2>() -= 0.5 * open * n;
-          b.r.head<2>() += 0.5 * open * n;
-        } else if (ma) {
-          a.r.head<2>() -= open * n;
-        } else if (mb) {
-          b.r.head<2>() += open * n;
-        }
-      }
-    }
     RecordTransition(events, ia, fa, a);
     RecordTransition(events, ib, fb, b);
     SetOrigin(ia, a, t_);
     SetOrigin(ib, b, t_);
+    // A plastic (resting) contact, or a push with nothing to resolve: open a resting gap so
+    // that the contact, if the cloth keeps closing it, re-forms later instead of at once.
+    Trajectory& ta = traj_[ia];
+    Trajectory& tb = traj_[ib];
+    const Eigen::Vector2d dp = tb.r0 - ta.r0;
+    const double dist = dp.norm();
+    if (dist > 0.0 && dist < d_ + kRestingGap) {
+      const Eigen::Vector2d n = dp / dist;
+      if ((tb.v0 - ta.v0).dot(n) < kRestingContactSpeed) {
+        const double want = d_ + RestingGap(-(tb.a - ta.a).dot(n));
+        const double open = std::max(0.0, want - dist);
+        const bool ma = IsTranslating(ta.state), mb = IsTranslating(tb.state);
+        if (ma && mb) {
+          ta.r0 -= 0.5 * open * n;
+          tb.r0 += 0.5 * open * n;
+        } else if (ma) {
+          ta.r0 -= open * n;
+        } else if (mb) {
+          tb.r0 += open * n;
+        }
+      }
+    }
     Repredict(ia, ib);
   }
 
@@ -636,13 +659,17 @@ class EventSimulation final : public TableSimulation {
         events->push_back({.t_s = t_, .kind = EventKind::kBallCushion, .a = ia, .other = k,
                            .va = a.v.head<2>()});
       }
-      if (dist < dc_ + kRestingGap && a.v.head<2>().dot(n) < kRestingContactSpeed &&
-          IsTranslating(a.state)) {
-        a.r.head<2>() += (dc_ + kRestingGap - dist) * n;
+      RecordTransition(events, ia, from, a);
+      SetOrigin(ia, a, t_);
+      Trajectory& ta = traj_[ia];
+      if (dist < dc_ + kRestingGap && ta.v0.dot(n) < kRestingContactSpeed &&
+          IsTranslating(ta.state)) {
+        ta.r0 += std::max(0.0, dc_ + RestingGap(-ta.a.dot(n)) - dist) * n;
       }
+    } else {
+      RecordTransition(events, ia, from, a);
+      SetOrigin(ia, a, t_);
     }
-    RecordTransition(events, ia, from, a);
-    SetOrigin(ia, a, t_);
     Repredict(ia);
   }
 

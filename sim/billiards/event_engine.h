@@ -16,25 +16,29 @@
 
 namespace sportsim::billiards {
 
-/// After a plastic (resting) contact the balls are set this far apart (m), so that a contact
-/// that a ball's spin keeps pushing closed re-forms after sqrt(2 gap / a) (0.2 ms at 4 m/s^2,
-/// the most two sliding balls can close at) with an approach speed sqrt(2 a gap) <= 0.9 mm/s,
-/// again below kRestingContactSpeed: the push is resolved as a train of plastic hops instead of
-/// a Zeno cascade. 0.1 um moves nothing anyone can see.
+/// After a plastic (resting) contact the bodies are set apart by a resting gap (m): this one,
+/// or less where the cloth closes the contact faster, so that a contact a ball's spin keeps
+/// pushing shut re-forms after sqrt(2 gap / a) (0.2 ms at 4 m/s^2, two sliding balls at the
+/// default mu_s) with an approach speed sqrt(2 a gap) below kRestingContactSpeed, plastic again:
+/// the push is resolved as a train of plastic hops instead of a Zeno cascade. 0.1 um moves
+/// nothing anyone can see.
 inline constexpr double kRestingGap = 1e-7;
+/// The smallest resting gap (m), for closing accelerations above 200 m/s^2 (extreme mu_s, g).
+inline constexpr double kMinRestingGap = 1e-9;
 
 /// A plastic contact between the same two bodies within this time (s) of the previous one
 /// continues a push (a train of hops) and is not reported again; the first one is.
 inline constexpr double kRestingTrain = 0.01;
 
 /// Predictions look at most this far ahead (s); a ball with nothing predicted within it is
-/// re-predicted then (only an unbounded table without rolling resistance gets there).
+/// re-predicted then (a ball that barely slows: rolling resistance or spin decay off or tiny).
 inline constexpr double kPredictionHorizon = 1000.0;
 
 /// Orientation of a ball whose spin axis turns (sliding, or rolling with side spin) is
 /// integrated in pieces, 4th-order Magnus per piece, on a grid anchored at the ball's last event
 /// (so evaluating at any times gives the same values). A piece turns the ball by at most this
-/// angle (rad), so its length is set per segment from the largest |w| in it.
+/// angle (rad), so its length is set per segment from the largest |w| in it (pieces are never
+/// shorter than 1/8192 s, so above 2048 rad/s they turn further).
 inline constexpr double kOrientationTurn = 0.25;
 
 std::unique_ptr<TableSimulation> MakeEventSimulation(const TableModel& model,

@@ -220,7 +220,9 @@ TEST(EventEngineTest, NearGrazingContactsHitOrMissByTheGeometry) {
         // The closed form: sqrt(d^2 - offset^2) = 1.07e-5 m from a difference of squares
         // (eps d^2 / (2 x 1.07e-5) = 3e-14 m); the engine polishes on the distance (its slope
         // is 1.9e-4 m/s here, so 1e-17 m of rounding is 6e-14 s). 1e-12 s.
-        if (e.kind == EventKind::kBallBall) EXPECT_NEAR(e.t_s, t, 1e-12);
+        if (e.kind == EventKind::kBallBall) {
+          EXPECT_NEAR(e.t_s, t, 1e-12);
+        }
       }
     } else {
       EXPECT_EQ(hits, 0);
@@ -288,8 +290,14 @@ TEST(EventEngineTest, BallFrozenToACushion) {
 // A spin-driven ball pushing into a frozen cluster against the cushion (follow into balls
 // frozen to the rail): resting contacts become a short train of plastic hops, not a Zeno
 // cascade. It ends at rest, without overlap, well below the event cap.
-TEST(EventEngineTest, DrivenIntoAFrozenClusterEndsWithoutACascade) {
-  const TableModel m = Model("pool-9ft");
+// Also at mu_s = 0.5, where the cloth closes a contact at up to 2 mu_s g = 9.8 m/s^2: the
+// resting gap shrinks so the hops stay plastic (a fixed 0.1 um gap made them bounce at 1.4 mm/s
+// and report every hop).
+class DrivenIntoAFrozenCluster : public ::testing::TestWithParam<double> {};
+TEST_P(DrivenIntoAFrozenCluster, EndsWithoutACascade) {
+  PhysicsParams params = MakeTablePreset("pool-9ft")->params;
+  params.mu_slide = GetParam();
+  const TableModel m = Model("pool-9ft", &params);
   const double d = 2 * m.radius();
   const double y = 0.5 * m.spec().width_m - m.cushion_contact_distance();
   const double x = -0.6;  // away from the side pocket
@@ -319,6 +327,26 @@ TEST(EventEngineTest, DrivenIntoAFrozenClusterEndsWithoutACascade) {
   EXPECT_LT(sim->events_processed(), 20000);
 }
 
+INSTANTIATE_TEST_SUITE_P(MuSlide, DrivenIntoAFrozenCluster, ::testing::Values(0.2, 0.5));
+
+// A pair that starts overlapped by 0.5 um (ValidateLayout allows 1 um) and moves apart slower
+// than the overlap can open before the cloth turns it back: it must collide on the way back,
+// not pass through (found in review).
+TEST(EventEngineTest, OverlappedPairTurningBackCollides) {
+  const TableModel m = Model("unbounded");
+  const double R = m.radius();
+  // Slip u_x = v_x - R w_y = -1 m/s: friction pushes A back towards B at mu_s g.
+  TableState s{.balls = {BallAt("A", 0, 0, m, {-1e-3, 0, 0}, {0, (1.0 - 1e-3) / R, 0}),
+                         BallAt("B", 2 * R - 5e-7, 0, m)}};
+  ASSERT_EQ(s.balls[0].state, MotionState::kSliding);
+  std::vector<Event> ev;
+  std::unique_ptr<TableSimulation> sim = Sim(m, kEvent, s, &ev);
+  ASSERT_TRUE(sim->AdvanceTo(0.05, &ev).ok());
+  EXPECT_GE(Count(ev, EventKind::kBallBall), 1);
+  EXPECT_GT(sim->state().balls[1].v.x(), 0.0) << "B must have been pushed";
+  EXPECT_LE(LargestOverlap(m, sim->state()), 5e-7);
+}
+
 // Newton's cradle: the cue ball touching a line of four frozen balls, e = 1, no friction: the
 // cascade runs at t = 0 in id order and only the last ball leaves, with the cue ball's speed.
 TEST(EventEngineTest, NewtonsCradle) {
@@ -334,7 +362,9 @@ TEST(EventEngineTest, NewtonsCradle) {
   ASSERT_TRUE(sim->AdvanceTo(0.6, &ev).ok());
   ASSERT_EQ(Count(ev, EventKind::kBallBall), 4);
   for (const Event& e : ev) {
-    if (e.kind == EventKind::kBallBall) EXPECT_EQ(e.t_s, 0.0);
+    if (e.kind == EventKind::kBallBall) {
+      EXPECT_EQ(e.t_s, 0.0);
+    }
   }
   const TableState& out = sim->state();
   for (int i = 0; i < 4; ++i) EXPECT_LT(out.balls[i].v.norm(), 1e-12) << i;
@@ -426,7 +456,9 @@ TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
         worst_overlap = std::max(worst_overlap, overlap);
         worst_pen = std::max(worst_pen, pen);
       }
-      if (m.spec().bounded) EXPECT_TRUE(sim->AtRest()) << preset << " shot " << i;
+      if (m.spec().bounded) {
+        EXPECT_TRUE(sim->AtRest()) << preset << " shot " << i;
+      }
       for (const Ball& b : sim->state().balls) {
         if (b.state == MotionState::kPocketed) {
           EXPECT_GE(b.pocket, 0) << preset << " shot " << i << ": " << b.id << " left the table";
