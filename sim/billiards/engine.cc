@@ -26,10 +26,8 @@ constexpr double kTimeTol = 1e-13;
 // A step that splits into more sub-steps than this is a runaway (a Zeno cascade).
 constexpr int kMaxSubsteps = 1000000;
 
-bool Translating(const Ball& b) {
-  return b.state == MotionState::kSliding || b.state == MotionState::kRolling;
-}
-bool Moving(const Ball& b) { return Translating(b) || b.state == MotionState::kSpinning; }
+bool Translating(const Ball& b) { return IsTranslating(b.state); }
+bool Moving(const Ball& b) { return IsMoving(b.state); }
 
 // One integrator step of length h in the ball's current motion state.
 void IntegrateBall(const TableModel& model, uint32_t disabled, Integrator integrator, double h,
@@ -140,8 +138,8 @@ class SteppedEngine {
     accel_.resize(n_);
   }
 
+  // Balls given a velocity were started by TableSimulation::Create (StartMoving).
   absl::Status Run(double t_end) {
-    StartMoving(model_, s_, events_);
     const double dt = o_.dt_s;
     while (s_->t_s < t_end) {
       if (s_->AtRest()) {
@@ -168,10 +166,7 @@ class SteppedEngine {
   void Record(Event e) { events_->push_back(std::move(e)); }
 
   void RecordTransition(int i, MotionState from) {
-    const Ball& b = s_->balls[i];
-    if (b.state == from) return;
-    Record({.t_s = s_->t_s, .kind = EventKind::kTransition, .a = i, .from = from, .to = b.state,
-            .va = b.v.head<2>()});
+    billiards::RecordTransition(s_->t_s, i, from, s_->balls[i], events_);
   }
 
   absl::Status Step(double t_end) {
@@ -619,7 +614,8 @@ absl::Status ValidateSolverOptions(const SolverOptions& o) {
 
 absl::Status Advance(const TableModel& model, const SolverOptions& options, double t_end_s,
                      TableState* state, std::vector<Event>* events) {
-  if (absl::Status s = ValidateSolverOptions(options); !s.ok()) return s;
+  // Checked before Create touches anything: a bad time changes nothing (Create checks the
+  // options).
   if (!(std::isfinite(t_end_s) && t_end_s >= state->t_s)) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "t_end_s must be finite and not before the table's time %g s, got %g", state->t_s,
@@ -641,11 +637,7 @@ void StartMoving(const TableModel& model, TableState* state, std::vector<Event>*
     b.v.z() = 0.0;
     const MotionState from = b.state;
     b.state = Classify(model, b);
-    if (b.state != from) {
-      events->push_back({.t_s = state->t_s, .kind = EventKind::kTransition,
-                         .a = static_cast<int>(i), .from = from, .to = b.state,
-                         .va = b.v.head<2>()});
-    }
+    RecordTransition(state->t_s, static_cast<int>(i), from, b, events);
   }
 }
 

@@ -53,11 +53,6 @@ struct Later {
   bool operator()(const Pending& x, const Pending& y) const { return y.Before(x); }
 };
 
-bool IsTranslating(MotionState s) {
-  return s == MotionState::kSliding || s == MotionState::kRolling;
-}
-bool IsMoving(MotionState s) { return IsTranslating(s) || s == MotionState::kSpinning; }
-
 // A ball's motion since its last event: constant accelerations from (t0, r0, v0, w0).
 struct Trajectory {
   double t0 = 0.0;
@@ -93,6 +88,13 @@ Eigen::Quaterniond SmallRotation(const Eigen::Vector3d& rot) {
   const double c = 1.0 - x2 / 2 * (1.0 - x2 / 12 * (1.0 - x2 / 30 * (1.0 - x2 / 56)));
   const double s = 0.5 * (1.0 - x2 / 6 * (1.0 - x2 / 20 * (1.0 - x2 / 42 * (1.0 - x2 / 72))));
   return Eigen::Quaterniond(c, s * rot.x(), s * rot.y(), s * rot.z());
+}
+
+// A touching contact (gap below kTouchGap) with normal approach speed `approach` and
+// `closing`, minus the gap's second derivative: handled now when approaching, or when not
+// moving apart while the cloth closes it (a resting push). Otherwise it is predicted later.
+bool TouchingContactNow(double approach, double closing) {
+  return approach > kMinApproachSpeed || (approach > -kMinApproachSpeed && closing > 0.0);
 }
 
 // Axis-aligned box of a path p + v s + a s^2 / 2 over s in [0, S].
@@ -236,7 +238,6 @@ class EventSimulation final : public TableSimulation {
     tr.q_k = 0;
     tr.q_cached = tr.q0;
     ++tr.version;
-    state_.balls[i].state = b.state;
   }
 
   Eigen::Vector2d PosAt(int i, double t) const {
@@ -304,7 +305,9 @@ class EventSimulation final : public TableSimulation {
   // The end of what can be predicted for ball i now.
   double Window(int i) const { return std::min(traj_[i].t_next, t_ + kPredictionHorizon); }
 
-  Pending PredictPair(int i, int j) const {
+  // Ball i (at P, V now) against ball j, looking at most `horizon` ahead.
+  Pending PredictPair(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
+                      double horizon) const {
     const Trajectory& ti = traj_[i];
     const Trajectory& tj = traj_[j];
     Pending p{.kind = Kind::kBall, .a = std::min(i, j), .b = std::max(i, j)};
@@ -312,9 +315,9 @@ class EventSimulation final : public TableSimulation {
     p.vb = traj_[p.b].version;
     if (!IsTranslating(ti.state) && !IsTranslating(tj.state)) return p;
     if (ti.state == MotionState::kPocketed || tj.state == MotionState::kPocketed) return p;
-    const double S = std::min(Window(i), Window(j)) - t_;
-    const Eigen::Vector2d dp = PosAt(j, t_) - PosAt(i, t_);
-    const Eigen::Vector2d dv = VelAt(j, t_) - VelAt(i, t_);
+    const double S = std::min(horizon, Window(j) - t_);
+    const Eigen::Vector2d dp = PosAt(j, t_) - P;
+    const Eigen::Vector2d dv = VelAt(j, t_) - V;
     const Eigen::Vector2d da = tj.a - ti.a;
     // Cull: the relative path's box must reach the disc of radius d around the origin.
     const Box box = PathBox(dp, dv, da, S);
@@ -325,13 +328,8 @@ class EventSimulation final : public TableSimulation {
     if (gap < kTouchGap) {
       const Eigen::Vector2d n = dp / dist;
       const double approach = -dv.dot(n);
-      if (approach > kMinApproachSpeed) {
-        p.t = t_;  // touching and approaching: a collision now
-        return p;
-      }
-      // Not moving apart, and the gap's second derivative closes it: a resting push now.
       const double closing = -da.dot(n) - (dv.squaredNorm() - approach * approach) / dist;
-      if (approach > -kMinApproachSpeed && closing > 0.0) {
+      if (TouchingContactNow(approach, closing)) {
         p.t = t_;
         return p;
       }
@@ -377,13 +375,9 @@ class EventSimulation final : public TableSimulation {
     if (gap < kTouchGap) {
       const Eigen::Vector2d n = off / dist;
       const double approach = -V.dot(n);
-      if (approach > kMinApproachSpeed) {
-        p.t = t_;
-        return p;
-      }
       const double closing =
           -A.dot(n) - (at_end ? (V.squaredNorm() - approach * approach) / dist : 0.0);
-      if (approach > -kMinApproachSpeed && closing > 0.0) {
+      if (TouchingContactNow(approach, closing)) {
         p.t = t_;
         return p;
       }
@@ -484,12 +478,9 @@ class EventSimulation final : public TableSimulation {
     const auto consider = [&best](const Pending& c) {
       if (c.found() && c.Before(best)) best = c;
     };
-    for (int j = 0; j < n_; ++j) {
-      if (j != i) consider(PredictPair(i, j));
-    }
+    const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
     if (IsTranslating(tr.state) && model_.spec().bounded) {
       const double S = Window(i) - t_;
-      const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
       const Eigen::Vector2d& A = tr.a;
       const Box box = PathBox(P, V, A, S);
       if (cushions_) {
@@ -501,6 +492,14 @@ class EventSimulation final : public TableSimulation {
         for (int k = 0; k < np; ++k) consider(PredictPocket(i, k, box, S, P, V, A));
       }
       consider(PredictLeave(i, box, S, P, V, A));
+    }
+    // Pairs only up to the best found so far: ball i is predicted again by then anyway (its
+    // best event is handled, or made stale by a change of i or its partner, and either way
+    // Predict(i) runs), so a later contact would be thrown away.
+    for (int j = 0; j < n_; ++j) {
+      if (j == i) continue;
+      const double horizon = std::min(Window(i), best.t) - t_;
+      consider(PredictPair(i, P, V, j, horizon));
     }
     best_[i] = best;
     if (best.found()) Push(best);
@@ -538,11 +537,6 @@ class EventSimulation final : public TableSimulation {
 
   // --- Handling ----------------------------------------------------------------------------
 
-  void RecordTransition(std::vector<Event>* events, int i, MotionState from, const Ball& b) {
-    if (b.state == from) return;
-    events->push_back({.t_s = t_, .kind = EventKind::kTransition, .a = i, .from = from,
-                       .to = b.state, .va = b.v.head<2>()});
-  }
 
   absl::Status Handle(const Pending& e, std::vector<Event>* events) {
     switch (e.kind) {
@@ -561,7 +555,7 @@ class EventSimulation final : public TableSimulation {
         const MotionState from = b.state;
         const auto kind = static_cast<TransitionKind>(e.other);
         if (kind != TransitionKind::kNone) ApplyTransition(model_, kind, &b);
-        RecordTransition(events, e.a, from, b);
+        RecordTransition(t_, e.a, from, b, events);
         SetOrigin(e.a, b, t_);
         Repredict(e.a);
         break;
@@ -615,8 +609,8 @@ class EventSimulation final : public TableSimulation {
                            .va = a.v.head<2>(), .vb = b.v.head<2>()});
       }
     }
-    RecordTransition(events, ia, fa, a);
-    RecordTransition(events, ib, fb, b);
+    RecordTransition(t_, ia, fa, a, events);
+    RecordTransition(t_, ib, fb, b, events);
     SetOrigin(ia, a, t_);
     SetOrigin(ib, b, t_);
     // A plastic (resting) contact, or a push with nothing to resolve: open a resting gap so
@@ -659,7 +653,7 @@ class EventSimulation final : public TableSimulation {
         events->push_back({.t_s = t_, .kind = EventKind::kBallCushion, .a = ia, .other = k,
                            .va = a.v.head<2>()});
       }
-      RecordTransition(events, ia, from, a);
+      RecordTransition(t_, ia, from, a, events);
       SetOrigin(ia, a, t_);
       Trajectory& ta = traj_[ia];
       if (dist < dc_ + kRestingGap && ta.v0.dot(n) < kRestingContactSpeed &&
@@ -667,7 +661,7 @@ class EventSimulation final : public TableSimulation {
         ta.r0 += std::max(0.0, dc_ + RestingGap(-ta.a.dot(n)) - dist) * n;
       }
     } else {
-      RecordTransition(events, ia, from, a);
+      RecordTransition(t_, ia, from, a, events);
       SetOrigin(ia, a, t_);
     }
     Repredict(ia);
@@ -682,7 +676,7 @@ class EventSimulation final : public TableSimulation {
     a.state = MotionState::kPocketed;
     state_.balls[ia].pocket = k;
     events->push_back({.t_s = t_, .kind = EventKind::kBallPocket, .a = ia, .other = k});
-    RecordTransition(events, ia, from, a);
+    RecordTransition(t_, ia, from, a, events);
     SetOrigin(ia, a, t_);
     Repredict(ia);
   }

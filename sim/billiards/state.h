@@ -24,6 +24,13 @@ enum class MotionState : uint8_t {
 };
 std::string_view MotionStateName(MotionState s);  ///< "stationary", "spinning", ...
 
+/// The ball's centre moves (sliding or rolling).
+inline bool IsTranslating(MotionState s) {
+  return s == MotionState::kSliding || s == MotionState::kRolling;
+}
+/// The ball moves in any way the cloth law acts on (translating or spinning in place).
+inline bool IsMoving(MotionState s) { return IsTranslating(s) || s == MotionState::kSpinning; }
+
 /// One ball. Vectors in the table frame; position z = R on the cloth.
 struct Ball {
   std::string id;             ///< "cue", "1" .. "15", "red1", "yellow", ...
@@ -66,6 +73,11 @@ struct Event {
   Eigen::Vector2d va = Eigen::Vector2d::Zero();  ///< ball a's velocity after (m/s)
   Eigen::Vector2d vb = Eigen::Vector2d::Zero();  ///< ball b's velocity after (m/s)
 };
+
+/// Appends ball i's change of motion state (from `from` to b.state) at t_s; nothing when the
+/// state did not change.
+void RecordTransition(double t_s, int i, MotionState from, const Ball& b,
+                      std::vector<Event>* events);
 
 /// Positions of every ball at one instant (the sampled trajectory).
 struct Sample {

@@ -1,4 +1,4 @@
-// The stepped engine beyond the closed forms: continuous collision detection, invariants over
+// The stepped engine beyond the closed forms (event_engine_test.cc has the event engine's): continuous collision detection, invariants over
 // random shots on every preset, determinism, rest, pockets, frozen balls, input validation.
 #include <cmath>
 #include <cstring>
@@ -126,7 +126,9 @@ TEST(SteppedEngineTest, InvariantsOverRandomShotsOnEveryPreset) {
           SimulateShot(m, o, s, {.max_time_s = preset == "unbounded" ? 20.0 : 600.0,
                                  .sample_interval_s = 1.0 / 60.0});
       ASSERT_TRUE(out.ok()) << preset << " shot " << i << ": " << out.status();
-      if (preset != "unbounded") EXPECT_TRUE(out->at_rest) << preset << " shot " << i;
+      if (preset != "unbounded") {
+        EXPECT_TRUE(out->at_rest) << preset << " shot " << i;
+      }
       double e_prev = std::numeric_limits<double>::infinity();
       for (const Sample& smp : out->samples) {
         // Energy from positions is not in a sample; check overlap here, energy below.
@@ -244,7 +246,8 @@ TEST(SteppedEngineTest, NewtonsCradleOfFrozenBalls) {
                          BallAt("3", 2 * d, 0, m), BallAt("4", 3 * d, 0, m)}};
   s.balls[0].v = Eigen::Vector3d(1.0, 0, 0);
   s.balls[0].r.x() = -d;  // touching: the cascade runs at t = 0
-  const SolverOptions o{.disabled = kEffectDrag | kEffectBallFriction};
+  const SolverOptions o{.engine = Engine::kStepped,
+                        .disabled = kEffectDrag | kEffectBallFriction};
   std::vector<Event> ev;
   ASSERT_TRUE(Advance(m, o, 0.6, &s, &ev).ok());
   EXPECT_EQ(Count(ev, EventKind::kBallBall), 4);
@@ -257,27 +260,35 @@ TEST(SteppedEngineTest, NewtonsCradleOfFrozenBalls) {
   }
 }
 
-TEST(SteppedEngineTest, BallAimedAtCornerIsPocketed) {
+TEST(BothEnginesTest, BallAimedAtCornerIsPocketed) {
   const TableModel m = Model("pool-9ft");
   const double hx = 0.5 * m.spec().length_m, hy = 0.5 * m.spec().width_m;
   TableState s{.balls = {BallAt("cue", hx - 0.4, hy - 0.4, m)}};
   s.balls[0].v = Eigen::Vector3d(1.0, 1.0, 0);
-  std::vector<Event> ev;
-  ASSERT_TRUE(Advance(m, {}, 3.0, &s, &ev).ok());
-  ASSERT_EQ(Count(ev, EventKind::kBallPocket), 1);
-  EXPECT_EQ(s.balls[0].state, MotionState::kPocketed);
-  EXPECT_EQ(m.spec().pockets[s.balls[0].pocket].name, "top_right");
-  EXPECT_EQ(Count(ev, EventKind::kBallCushion), 0);
+  for (const Engine engine : {Engine::kStepped, Engine::kEvent}) {
+    TableState t = s;
+    std::vector<Event> ev;
+    ASSERT_TRUE(Advance(m, {.engine = engine}, 3.0, &t, &ev).ok());
+    ASSERT_EQ(Count(ev, EventKind::kBallPocket), 1) << EngineName(engine);
+    EXPECT_EQ(t.balls[0].state, MotionState::kPocketed);
+    EXPECT_EQ(m.spec().pockets[t.balls[0].pocket].name, "top_right");
+    EXPECT_EQ(Count(ev, EventKind::kBallCushion), 0);
+  }
 }
 
-TEST(SteppedEngineTest, CushionsOffLetBallsLeaveTheTable) {
+TEST(BothEnginesTest, CushionsOffLetBallsLeaveTheTable) {
   const TableModel m = Model("carom");
   TableState s{.balls = {BallAt("cue", 0, 0, m)}};
   s.balls[0].v = Eigen::Vector3d(0, 3.0, 0);
-  std::vector<Event> ev;
-  ASSERT_TRUE(Advance(m, {.disabled = kEffectDrag | kEffectCushions}, 2.0, &s, &ev).ok());
-  EXPECT_EQ(s.balls[0].state, MotionState::kPocketed);
-  EXPECT_EQ(s.balls[0].pocket, -1);
+  for (const Engine engine : {Engine::kStepped, Engine::kEvent}) {
+    TableState t = s;
+    std::vector<Event> ev;
+    ASSERT_TRUE(
+        Advance(m, {.engine = engine, .disabled = kEffectDrag | kEffectCushions}, 2.0, &t, &ev)
+            .ok());
+    EXPECT_EQ(t.balls[0].state, MotionState::kPocketed) << EngineName(engine);
+    EXPECT_EQ(t.balls[0].pocket, -1);
+  }
 }
 
 // Han-geometry cushion. Without friction the impulse (1 + e_c) m |v.n| acts along the contact
