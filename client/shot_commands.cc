@@ -124,12 +124,14 @@ int CountKind(const v1::SimulateShotResponse& r, v1::EventKind k) {
 }
 
 void PrintText(const v1::SimulateShotResponse& r) {
+  const std::string scheme =
+      r.integrator().empty() ? "" : absl::StrFormat(", %s, dt %g s", r.integrator(), r.dt_s());
   std::printf("%s after %.3f s; %d ball-ball, %d cushion, %d pocket events (%d in all); "
-              "%s engine, %s, dt %g s; %.3f ms CPU\n",
+              "%s engine%s; %.3f ms CPU\n",
               r.at_rest() ? "at rest" : "still moving", r.t_rest_s(),
               CountKind(r, v1::ball_ball), CountKind(r, v1::ball_cushion),
-              CountKind(r, v1::ball_pocket), r.events_size(), r.engine().c_str(),
-              r.integrator().c_str(), r.dt_s(), r.cpu_s() * 1e3);
+              CountKind(r, v1::ball_pocket), r.events_size(), r.engine().c_str(), scheme.c_str(),
+              r.cpu_s() * 1e3);
   if (r.has_strike()) {
     std::printf("strike: cue %.3f m/s -> ball %.3f m/s, phi %.2f deg, theta %.2f deg, a %.3f, "
                 "b %.3f, squirt %.2f deg\n",

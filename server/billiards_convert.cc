@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/status_util.h"
 #include "sim/billiards/rack.h"
 #include "sim/core/check.h"
 #include "sim/core/units.h"
@@ -15,12 +16,6 @@ namespace sportsim::server {
 namespace {
 
 namespace b = ::sportsim::billiards;
-
-// Prefixes a status message with the proto path of the message it came from.
-absl::Status In(std::string_view path, const absl::Status& s) {
-  if (s.ok()) return s;
-  return absl::Status(s.code(), absl::StrFormat("%s%s", path, s.message()));
-}
 
 std::string DefaultRack(std::string_view preset) {
   if (preset == "snooker") return "snooker";
@@ -42,12 +37,12 @@ absl::Status CheckId(std::string_view field, const std::string& id) {
 absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
   const std::string preset = setup.preset().empty() ? "pool-9ft" : setup.preset();
   absl::StatusOr<b::TableSpec> spec = b::MakeTablePreset(preset);
-  if (!spec.ok()) return In("table.preset: ", spec.status());
+  if (!spec.ok()) return PrefixStatus("table.preset: ", spec.status());
   // Parameters in name order, so the first error reported does not depend on map order.
   std::map<std::string, double> params(setup.params().begin(), setup.params().end());
   for (const auto& [name, value] : params) {
     if (absl::Status s = b::SetParam(name, value, &spec->params); !s.ok()) {
-      return In("table.params: ", s);
+      return PrefixStatus("table.params: ", s);
     }
   }
   switch (setup.cushion_model()) {
@@ -62,19 +57,22 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
       return absl::InvalidArgumentError(
           absl::StrFormat("table.cushion_model: unknown value %d", setup.cushion_model()));
   }
-  // A new ball radius moves the cushion nose with it unless the caller set the height.
+  // A new ball radius moves the cushion nose with it (where the preset ties the nose to the
+  // ball) unless the caller set the height.
   if (params.count("ball_radius_m") && !params.count("cushion_height_m")) {
-    spec->params.cushion_height_m = 0.635 * 2.0 * spec->params.ball_radius_m;
+    b::SetBallRadius(spec->params.ball_radius_m, &*spec);
   }
   absl::StatusOr<b::TableModel> model = b::TableModel::Create(*std::move(spec));
-  if (!model.ok()) return In("table.params: ", model.status());
+  if (!model.ok()) return PrefixStatus("table.params: ", model.status());
   const std::string rack = setup.rack().empty() ? DefaultRack(preset) : setup.rack();
+  if (absl::Status s = CheckFiniteInRange("table.rack_jitter_m", setup.rack_jitter_m(), 0, false,
+                                          b::kMaxRackJitterM, false);
+      !s.ok()) {
+    return s;
+  }
   absl::StatusOr<std::vector<b::Ball>> balls =
       b::MakeRack(rack, *model, setup.rack_jitter_m(), setup.rack_seed());
-  if (!balls.ok()) {
-    return In(setup.rack_jitter_m() != 0 ? "table.rack_jitter_m: " : "table.rack: ",
-              balls.status());
-  }
+  if (!balls.ok()) return PrefixStatus("table.rack: ", balls.status());
   TableBuild out{.model = *std::move(model), .state = {.balls = *std::move(balls)}, .rack = rack};
   if (setup.balls_size() > kMaxBalls) {
     return absl::InvalidArgumentError(
@@ -100,7 +98,7 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
         "table.balls: at most %d balls on a table, got %d", kMaxBalls, out.state.balls.size()));
   }
   if (absl::Status s = b::ValidateLayout(out.model, out.state); !s.ok()) {
-    return In("table.balls: ", s);
+    return PrefixStatus("table.balls: ", s);
   }
   return out;
 }
@@ -129,12 +127,14 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
   if (solver.has_dt_s()) o.dt_s = solver.dt_s();
   o.ccd = !solver.no_ccd();
   if (solver.has_max_events()) o.max_events = solver.max_events();
+  uint32_t asked_off = 0;  // what the request disables (the defaults aside: drag is off)
   for (const std::string& name : solver.disable()) {
     const uint32_t bit = b::EffectFromName(name);
     if (bit == 0) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "solver.disable: unknown effect \"%s\" (GetInfo lists the effects)", name));
     }
+    asked_off |= bit;
     o.disabled |= bit;
   }
   for (const std::string& name : solver.enable()) {
@@ -143,7 +143,7 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
       return absl::InvalidArgumentError(absl::StrFormat(
           "solver.enable: unknown effect \"%s\" (GetInfo lists the effects)", name));
     }
-    if (o.disabled & bit & ~static_cast<uint32_t>(b::kEffectDrag)) {
+    if (asked_off & bit) {
       return absl::InvalidArgumentError(
           absl::StrFormat("solver: effect \"%s\" is both enabled and disabled", name));
     }
@@ -153,7 +153,7 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
   if (solver.engine() == v1::ENGINE_UNSPECIFIED && (o.disabled & b::kEffectDrag) == 0) {
     o.engine = b::Engine::kStepped;
   }
-  if (absl::Status s = b::ValidateSolverOptions(o); !s.ok()) return In("solver.", s);
+  if (absl::Status s = b::ValidateSolverOptions(o); !s.ok()) return PrefixStatus("solver.", s);
   return o;
 }
 
@@ -212,7 +212,7 @@ absl::StatusOr<ShotJob> ShotJobFromProto(const v1::SimulateShotRequest& request)
     }
     absl::StatusOr<b::StrikeOutcome> out =
         b::ApplyStrike(job.table.model, job.solver.disabled, *strike, cue, &state);
-    if (!out.ok()) return In("strike.", out.status());
+    if (!out.ok()) return PrefixStatus("strike.", out.status());
     job.strike = *out;
   } else if (request.motions_size() > 0) {
     if (request.motions_size() > kMaxBalls) {
@@ -365,8 +365,10 @@ void ShotResultToProto(const ShotJob& job, const b::ShotResult& result,
     }
   }
   out->set_engine(std::string(b::EngineName(job.solver.engine)));
-  out->set_integrator(std::string(b::IntegratorName(job.solver.integrator)));
-  out->set_dt_s(job.solver.dt_s);
+  if (job.solver.engine == b::Engine::kStepped) {  // the event engine has neither
+    out->set_integrator(std::string(b::IntegratorName(job.solver.integrator)));
+    out->set_dt_s(job.solver.dt_s);
+  }
   if (job.include_geometry) GeometryToProto(model, out->mutable_geometry());
 }
 

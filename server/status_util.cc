@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "absl/strings/str_format.h"
+
 namespace sportsim::server {
 
 grpc::StatusCode ToGrpcCode(absl::StatusCode code) {
@@ -30,6 +32,11 @@ grpc::StatusCode ToGrpcCode(absl::StatusCode code) {
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(ToGrpcCode(status.code()), std::string(status.message()));
+}
+
+absl::Status PrefixStatus(std::string_view prefix, const absl::Status& s) {
+  if (s.ok()) return s;
+  return absl::Status(s.code(), absl::StrFormat("%s%s", prefix, s.message()));
 }
 
 }  // namespace sportsim::server

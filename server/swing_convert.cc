@@ -6,6 +6,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/status_util.h"
 #include "sim/core/units.h"
 
 namespace sportsim::server {
@@ -13,10 +14,6 @@ namespace {
 
 using swing::Interpolation;
 using swing::SwingIntegrator;
-
-absl::Status Prefixed(absl::string_view prefix, const absl::Status& s) {
-  return absl::Status(s.code(), absl::StrCat(prefix, s.message()));
-}
 
 absl::Status CheckAngleDeg(std::string_view name, double deg) {
   if (std::isfinite(deg) && deg >= -360.0 && deg <= 360.0) return absl::OkStatus();
@@ -83,7 +80,7 @@ absl::StatusOr<swing::SwingModel> SwingModelFromProto(
     }
   }
   absl::StatusOr<swing::SwingModel> model = swing::SwingModel::Create(params, disabled);
-  if (!model.ok()) return Prefixed("parameters.", model.status());
+  if (!model.ok()) return PrefixStatus("parameters.", model.status());
   return model;
 }
 
@@ -103,7 +100,7 @@ absl::StatusOr<swing::TorqueProgram> TorqueProgramFromProto(const v1::TorqueProg
     qb = *std::move(s);
   }
   absl::StatusOr<swing::TorqueProgram> out = swing::TorqueProgram::Create(qa, qb);
-  if (!out.ok()) return Prefixed("torques.", out.status());
+  if (!out.ok()) return PrefixStatus("torques.", out.status());
   return out;
 }
 
@@ -125,7 +122,7 @@ absl::StatusOr<swing::SwingSolverOptions> SwingSolverFromProto(const v1::SwingSo
   if (s.has_dt_s()) o.dt_s = s.dt_s();
   if (s.has_tolerance()) o.tolerance = s.tolerance();
   if (s.has_max_step_s()) o.max_step_s = s.max_step_s();
-  if (absl::Status st = swing::ValidateSolverOptions(o); !st.ok()) return Prefixed("solver.", st);
+  if (absl::Status st = swing::ValidateSolverOptions(o); !st.ok()) return PrefixStatus("solver.", st);
   return o;
 }
 
@@ -223,7 +220,7 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
                 .spin_rpm = l.spin_rpm(),
                 .spin_axis_deg = l.spin_axis_deg()};
   if (absl::Status s = swing::ValidateLaunchConditions(job.launch); !s.ok()) {
-    return Prefixed("launch.", s);
+    return PrefixStatus("launch.", s);
   }
   const v1::Atmosphere& a = r.atmosphere();
   if (a.has_temperature_c()) job.atmosphere.temperature_c = a.temperature_c();
@@ -232,7 +229,7 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
   if (a.has_altitude_m()) job.atmosphere.altitude_m = a.altitude_m();
   if (absl::StatusOr<swing::AirProperties> air = swing::ComputeAirProperties(job.atmosphere);
       !air.ok()) {
-    return Prefixed("atmosphere.", air.status());
+    return PrefixStatus("atmosphere.", air.status());
   }
   job.wind.speed_mps = r.wind().speed_mps();
   job.wind.toward_deg = r.wind().toward_deg();

@@ -154,6 +154,7 @@ std::span<const std::string_view> TablePresetNames() { return kPresets; }
 
 absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
   TableSpec t;
+  t.nose_fraction_of_diameter = 0.635;  // WPA, mid-range; carom sets a fixed height
   t.name = std::string(name);
   // WPA pool: 57.15 mm balls, nose height 63.5 % of the diameter; mouths 4.5-4.625 in (corner)
   // and 5-5.125 in (side); jaws run about 5 cm, the depth of a cushion.
@@ -163,7 +164,7 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     if (name == "pool-9ft") { t.length_m = 2.54; t.width_m = 1.27; }
     if (name == "pool-8ft") { t.length_m = 2.34; t.width_m = 1.17; }
     if (name == "pool-7ft") { t.length_m = 1.98; t.width_m = 0.99; }
-    t.params.cushion_height_m = 0.635 * 2.0 * t.params.ball_radius_m;
+    SetBallRadius(t.params.ball_radius_m, &t);
     BuildPocketTable(&t, pool_corner, pool_side);
   } else if (name == "snooker") {
     // WPBSA: 3569 x 1778 mm, 52.5 mm balls of about 142 g. Pocket openings follow the
@@ -174,7 +175,7 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     t.params.ball_radius_m = 0.02625;
     t.params.ball_mass_kg = 0.142;
     t.params.cue_end_mass_kg = 0.142 / 30;
-    t.params.cushion_height_m = 0.635 * 2.0 * t.params.ball_radius_m;
+    SetBallRadius(t.params.ball_radius_m, &t);
     BuildPocketTable(&t, {0.086, 142.0, 0.04}, {0.105, 104.0, 0.04});
   } else if (name == "carom") {
     // UMB match table 2840 x 1420 mm, balls 61.5 mm and about 210 g, cushion nose 37 mm.
@@ -183,6 +184,7 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     t.params.ball_radius_m = 0.03075;
     t.params.ball_mass_kg = 0.21;
     t.params.cue_end_mass_kg = 0.21 / 30;
+    t.nose_fraction_of_diameter = 0.0;
     t.params.cushion_height_m = 0.037;
     BuildCaromTable(&t);
   } else if (name == "unbounded") {
@@ -190,7 +192,7 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     t.bounded = false;
     t.length_m = 0.0;
     t.width_m = 0.0;
-    t.params.cushion_height_m = 0.635 * 2.0 * t.params.ball_radius_m;
+    SetBallRadius(t.params.ball_radius_m, &t);
   } else {
     return absl::InvalidArgumentError(absl::StrFormat(
         "table preset must be one of pool-7ft, pool-8ft, pool-9ft, snooker, carom, unbounded; "
@@ -228,6 +230,13 @@ absl::StatusOr<TableModel> TableModel::Create(TableSpec spec) {
     }
   }
   return TableModel(std::move(spec));
+}
+
+void SetBallRadius(double radius_m, TableSpec* spec) {
+  spec->params.ball_radius_m = radius_m;
+  if (spec->nose_fraction_of_diameter > 0.0) {
+    spec->params.cushion_height_m = spec->nose_fraction_of_diameter * 2.0 * radius_m;
+  }
 }
 
 }  // namespace sportsim::billiards

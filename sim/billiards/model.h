@@ -123,7 +123,15 @@ struct TableSpec {
   std::vector<CushionSegment> cushions;
   std::vector<Pocket> pockets;
   PhysicsParams params;  ///< the preset's defaults (ball size, cushion height)
+  /// Pool and snooker cushion noses sit at this fraction of the ball diameter (WPA: 62.5-64.5
+  /// %), so another ball size moves the nose with it (SetBallRadius); 0: a fixed height
+  /// (carom's 37 mm).
+  double nose_fraction_of_diameter = 0.0;
 };
+
+/// Sets the ball radius, and the cushion nose height with it where the spec ties the nose to
+/// the ball (nose_fraction_of_diameter > 0).
+void SetBallRadius(double radius_m, TableSpec* spec);
 
 /// Preset names: pool-7ft, pool-8ft, pool-9ft, snooker, carom, unbounded.
 std::span<const std::string_view> TablePresetNames();

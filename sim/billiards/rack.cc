@@ -36,7 +36,7 @@ std::span<const std::string_view> RackNames() { return kRacks; }
 
 absl::StatusOr<std::vector<Ball>> MakeRack(std::string_view name, const TableModel& model,
                                            double jitter_m, uint64_t seed) {
-  if (absl::Status s = CheckFiniteInRange("jitter_m", jitter_m, 0, false, 0.01, false); !s.ok()) {
+  if (absl::Status s = CheckFiniteInRange("jitter_m", jitter_m, 0, false, kMaxRackJitterM, false); !s.ok()) {
     return s;
   }
   const double radius = model.radius();

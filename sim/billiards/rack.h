@@ -16,6 +16,9 @@ namespace sportsim::billiards {
 /// empty, 8ball, 9ball, snooker, three-cushion, chapter19.
 std::span<const std::string_view> RackNames();
 
+/// Rack jitter must be in [0, this) (m).
+inline constexpr double kMaxRackJitterM = 0.01;
+
 /// Balls of a rack on this table, at rest. Racked balls touch (a tight rack); with `jitter_m`
 /// > 0 every ball sits on a grid spaced by 2R + jitter_m and is displaced by a seeded random
 /// vector shorter than jitter_m / 2, so the gaps vary in [0, 2 jitter_m] and balls never

@@ -91,7 +91,7 @@ TEST_F(ServerTest, GetInfoListsTheBilliardsCapabilities) {
   ASSERT_TRUE(stub->GetInfo(Ctx().get(), {}, &info).ok());
   const v1::Capabilities& c = info.capabilities();
   EXPECT_THAT(c.services(), Contains("sportsim.v1.Billiards"));
-  // Only what runs: the event engine is not built yet.
+  // The default engine first.
   EXPECT_THAT(c.engines(), ::testing::ElementsAre("event", "stepped"));
   EXPECT_THAT(c.integrators(), ::testing::ElementsAre("euler", "semi_implicit_euler", "rk4"));
   EXPECT_THAT(c.table_presets(), ::testing::UnorderedElementsAre(
