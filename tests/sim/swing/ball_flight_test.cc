@@ -318,8 +318,14 @@ TEST(BallFlightConventions, PositiveSpinAxisAndDirectionGoRight) {
   // straight (vertical-plane) path along the push line: round-off only.
   EXPECT_NEAR(std::atan2(p.lateral_m, p.carry_downrange_m),
               5 * kDegToRad, kAngleRoundoffRad);
-  EXPECT_NEAR(BackspinRpm(fade), fade.spin_rpm * std::cos(15 * kDegToRad),
-              kSpinRoundoffRpm);
+  // Back/side spin and spin/axis are two views of one spin: a round trip through
+  // LaunchFromBackAndSideSpin gives the same rate and axis, and a -15 deg axis (curving left)
+  // has negative sidespin.
+  const LaunchConditions back = LaunchFromBackAndSideSpin(
+      fade.ball_speed_mps, fade.launch_angle_deg, fade.launch_direction_deg, BackspinRpm(fade),
+      SidespinRpm(fade));
+  EXPECT_NEAR(back.spin_rpm, fade.spin_rpm, kSpinRoundoffRpm);
+  EXPECT_NEAR(back.spin_axis_deg, fade.spin_axis_deg, 1e-9);
   EXPECT_LT(SidespinRpm(fade), 0.0);
 }
 
@@ -440,9 +446,10 @@ TEST_P(BallFlightConvergence, AdaptiveMeetsItsTolerance) {
 }
 
 TEST_P(BallFlightConvergence, LandingTimeAtDefaultStep) {
-  // The brief's event accuracy: landing time to ~1e-9 s at the default
-  // 1 ms step (measured ~1e-13 s).
-  constexpr double kLandingTimeTolS = 1e-9;
+  // Landing time at the default 1 ms step: measured ~1e-13 s from the
+  // reference; 1e-11 s leaves 100x for rounding and still catches a landing
+  // refinement that stops early (the brief asks for ~1e-9 s).
+  constexpr double kLandingTimeTolS = 1e-11;
   const LaunchConditions launch = GetParam();
   const FlightResult ref = Fly(launch, Reference());
   EXPECT_NEAR(Fly(launch, {}).flight_time_s, ref.flight_time_s,

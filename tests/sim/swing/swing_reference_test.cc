@@ -70,7 +70,10 @@ TEST_P(SwingIndependentReferenceTest, ImpactMatches) {
   ASSERT_TRUE(r.ok()) << r.status();
   ASSERT_TRUE(r->impact);
   const SwingSample& i = *r->impact;
-  // The reference is quoted to 13 significant digits; our error at these settings is ~1e-12.
+  // The reference is quoted to 13 significant digits; our error at these settings is ~1e-12
+  // in time and angle. Rates and speed err by ~1e-10 on the chapter's swings but by up to
+  // 3.6e-8 (rk4) and 1.8e-9 (dp45) on the qalpha_1000 swing (the strongest torque)
+  // (measured: a 1e-9 tolerance fails there); 1e-7 covers it with 3x margin.
   constexpr double kTimeTolS = 1e-10, kAngleTolRad = 1e-9, kRateTolRps = 1e-7, kSpeedTolMps = 1e-7;
   EXPECT_NEAR(i.t_s, v.t, kTimeTolS);
   EXPECT_NEAR(i.alpha, v.alpha, kAngleTolRad);
