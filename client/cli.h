@@ -62,6 +62,7 @@ int RunHealth(const Context& ctx, const std::vector<std::string>& args);
 int RunSwing(const Context& ctx, const std::vector<std::string>& args);
 int RunFlight(const Context& ctx, const std::vector<std::string>& args);
 int RunShot(const Context& ctx, const std::vector<std::string>& args);
+int RunTable(const Context& ctx, const std::vector<std::string>& args);
 
 /// Values of a repeatable flag (--ball, --param), in command-line order. absl flags keep only
 /// the last value, so main() takes these out of argv before parsing.

@@ -4,7 +4,9 @@
 #include <charconv>
 #include <cstdio>
 #include <iostream>
+#include <cctype>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -48,6 +50,14 @@ Commands:
       [--no-ccd] [--disable EFFECT,...] [--enable drag] [--param NAME=VALUE ...]
       [--cushion-model han|mirror] [--noise X --seed N] [--jitter M --rack-seed N]
       [--sample-rate HZ] [--max-time S] [--svg FILE]
+  table create [setup and solver flags of shot simulate] [--seats N] [--seat-names A,B]
+      [--tick-hz HZ]                       an authoritative table; prints the seat tokens
+  table list [--page-size N --page-token T] | table get ID [--geometry]
+  table shoot ID --token T [strike flags of shot simulate] [--next-seat N]
+  table place ID --token T --ball ID@X,Y   ball in hand (the seat to play, balls at rest)
+  table turn ID --token T --seat N | table reset ID --token T | table delete ID --token T
+  table watch ID [--rate HZ] [--until-rest] [--fields position,velocity,spin,orientation]
+      [--changed-only] [--from-sequence N] [--svg FILE]   snapshots as they come
 Flags may be written --name value or --name=value; dashes and underscores are the same.
 Errors: the gRPC status code name and message on stderr, exit status = the code number
 (64 for usage errors). --helpfull lists every flag.)";
@@ -95,6 +105,64 @@ std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
   return out;
 }
 
+void Int64FieldNames(const google::protobuf::Descriptor* d, std::set<std::string>* names,
+                     std::set<const google::protobuf::Descriptor*>* seen) {
+  if (!seen->insert(d).second) return;
+  for (int i = 0; i < d->field_count(); ++i) {
+    const google::protobuf::FieldDescriptor* f = d->field(i);
+    using FD = google::protobuf::FieldDescriptor;
+    if (f->cpp_type() == FD::CPPTYPE_INT64 || f->cpp_type() == FD::CPPTYPE_UINT64) {
+      names->insert(f->name());
+    } else if (f->cpp_type() == FD::CPPTYPE_MESSAGE) {
+      Int64FieldNames(f->message_type(), names, seen);
+    }
+  }
+}
+
+// Protobuf's JSON mapping quotes 64-bit integers ("tick": "120"); the command-line contract
+// wants numbers, exact in every JSON reader up to 2^53 (a tick count at 1 kHz passes that after
+// 285,000 years). Only fields declared 64-bit in the message are unquoted, and only where the
+// quoted text is all digits.
+std::string Int64AsNumbers(const google::protobuf::Descriptor* d, const std::string& json) {
+  std::set<std::string> names;
+  std::set<const google::protobuf::Descriptor*> seen;
+  Int64FieldNames(d, &names, &seen);
+  if (names.empty()) return json;
+  std::string out;
+  out.reserve(json.size());
+  size_t i = 0;
+  while (i < json.size()) {
+    if (json[i] != '"') {
+      out += json[i++];
+      continue;
+    }
+    // A string token: copy it, and unquote the value after it when the key is a 64-bit field.
+    size_t j = i + 1;
+    while (j < json.size() && json[j] != '"') j += json[j] == '\\' ? 2 : 1;
+    const std::string token = json.substr(i + 1, j - i - 1);
+    out.append(json, i, j - i + 1);
+    i = j + 1;
+    size_t k = i;
+    while (k < json.size() && json[k] == ' ') ++k;
+    if (k < json.size() && json[k] == ':' && names.count(token) > 0) {
+      size_t v = k + 1;
+      while (v < json.size() && json[v] == ' ') ++v;
+      if (v < json.size() && json[v] == '"') {
+        size_t e = v + 1;
+        if (e < json.size() && json[e] == '-') ++e;
+        const size_t digits = e;
+        while (e < json.size() && std::isdigit(static_cast<unsigned char>(json[e]))) ++e;
+        if (e > digits && e < json.size() && json[e] == '"') {
+          out.append(json, i, v - i);
+          out.append(json, v + 1, e - v - 1);
+          i = e + 1;
+        }
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 std::unique_ptr<grpc::ClientContext> Context::NewCall() const {
@@ -128,7 +196,7 @@ std::string ToJson(const google::protobuf::Message& message, bool one_line) {
   options.add_whitespace = !one_line;
   std::string out;
   (void)google::protobuf::util::MessageToJsonString(message, &out, options);
-  return out;
+  return Int64AsNumbers(message.GetDescriptor(), out);
 }
 
 const std::vector<std::string>& RepeatedFlagValues(std::string_view name) {
@@ -239,5 +307,6 @@ int main(int argc, char** argv) {
   if (command == "swing") return RunSwing(ctx, rest);
   if (command == "flight") return RunFlight(ctx, rest);
   if (command == "shot") return RunShot(ctx, rest);
-  return UsageError("unknown command '" + command + "' (info, health, swing, flight, shot)");
+  if (command == "table") return RunTable(ctx, rest);
+  return UsageError("unknown command '" + command + "' (info, health, swing, flight, shot, table)");
 }

@@ -14,6 +14,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
+#include "client/billiards_flags.h"
 #include "client/cli.h"
 #include "client/table_svg.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
@@ -45,7 +46,6 @@ ABSL_FLAG(std::optional<double>, max_time, std::nullopt, "Stop after this much s
 ABSL_FLAG(std::string, svg, "", "Write a top view of the shot to this SVG file");
 
 namespace sportsim::cli {
-namespace {
 
 std::optional<std::string> BuildSetup(v1::TableSetup* t) {
   t->set_preset(absl::GetFlag(FLAGS_table));
@@ -116,6 +116,8 @@ std::optional<std::string> BuildStrike(v1::CueStrike* c) {
   c->set_seed(absl::GetFlag(FLAGS_seed));
   return std::nullopt;
 }
+
+namespace {
 
 int CountKind(const v1::SimulateShotResponse& r, v1::EventKind k) {
   int n = 0;

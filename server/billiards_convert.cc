@@ -24,6 +24,8 @@ std::string DefaultRack(std::string_view preset) {
   return "8ball";
 }
 
+}  // namespace
+
 absl::Status CheckId(std::string_view field, const std::string& id) {
   if (id.empty() || id.size() > 32) {
     return absl::InvalidArgumentError(
@@ -31,8 +33,6 @@ absl::Status CheckId(std::string_view field, const std::string& id) {
   }
   return absl::OkStatus();
 }
-
-}  // namespace
 
 absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
   const std::string preset = setup.preset().empty() ? "pool-9ft" : setup.preset();
@@ -335,6 +335,16 @@ void GeometryToProto(const b::TableModel& model, v1::TableGeometry* out) {
   }
 }
 
+void StrikeReportToProto(const b::StrikeOutcome& strike, v1::StrikeReport* s) {
+  s->set_cue_speed_mps(strike.cue_speed_mps);
+  s->set_ball_speed_mps(strike.v.head<2>().norm());
+  s->set_phi_deg(RadToDeg(strike.applied.phi_rad));
+  s->set_theta_deg(RadToDeg(strike.applied.theta_rad));
+  s->set_a(strike.applied.a);
+  s->set_b(strike.applied.b);
+  s->set_squirt_deg(RadToDeg(strike.squirt_rad));
+}
+
 void ShotResultToProto(const ShotJob& job, const b::ShotResult& result,
                        v1::SimulateShotResponse* out) {
   const b::TableModel& model = job.table.model;
@@ -345,16 +355,7 @@ void ShotResultToProto(const ShotJob& job, const b::ShotResult& result,
     EventToProto(model, result.final_state, e, out->add_events());
   }
   out->set_cpu_s(result.cpu_s);
-  if (job.strike) {
-    v1::StrikeReport* s = out->mutable_strike();
-    s->set_cue_speed_mps(job.strike->cue_speed_mps);
-    s->set_ball_speed_mps(job.strike->v.head<2>().norm());
-    s->set_phi_deg(RadToDeg(job.strike->applied.phi_rad));
-    s->set_theta_deg(RadToDeg(job.strike->applied.theta_rad));
-    s->set_a(job.strike->applied.a);
-    s->set_b(job.strike->applied.b);
-    s->set_squirt_deg(RadToDeg(job.strike->squirt_rad));
-  }
+  if (job.strike) StrikeReportToProto(*job.strike, out->mutable_strike());
   for (const b::Sample& sample : result.samples) {
     v1::ShotSample* ps = out->add_samples();
     ps->set_t_s(sample.t_s);

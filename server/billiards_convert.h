@@ -5,6 +5,7 @@
 
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "absl/status/statusor.h"
@@ -20,6 +21,9 @@ namespace sportsim::server {
 
 /// Most balls a table may hold (snooker has 22).
 inline constexpr int kMaxBalls = 64;
+
+/// OK for an id of 1 to 32 characters; else InvalidArgument naming `field`.
+absl::Status CheckId(std::string_view field, const std::string& id);
 
 /// A table built from a TableSetup: model and balls at rest.
 struct TableBuild {
@@ -49,6 +53,7 @@ void BallToProto(const billiards::TableModel& model, const billiards::Ball& ball
 void EventToProto(const billiards::TableModel& model, const billiards::TableState& state,
                   const billiards::Event& event, v1::TableEvent* out);
 void GeometryToProto(const billiards::TableModel& model, v1::TableGeometry* out);
+void StrikeReportToProto(const billiards::StrikeOutcome& strike, v1::StrikeReport* out);
 void ShotResultToProto(const ShotJob& job, const billiards::ShotResult& result,
                        v1::SimulateShotResponse* out);
 

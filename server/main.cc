@@ -16,12 +16,23 @@
 ABSL_FLAG(std::string, listen, "127.0.0.1:50051",
           "Address to serve on, host:port or [ipv6]:port; port 0 picks a free port");
 ABSL_FLAG(int, port, -1, "If set, overrides the port of --listen");
-ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(5),
-          "On SIGINT/SIGTERM, how long in-flight calls may take to finish before cancellation");
+ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(3),
+          "On SIGINT/SIGTERM, how long in-flight calls may take to finish before cancellation "
+          "(watch streams end at once, with a last snapshot)");
+ABSL_FLAG(int, max_request_bytes, 64 << 10, "Largest request message accepted (bytes)");
+ABSL_FLAG(int, max_tables, 2000, "Most tables the server holds at once");
+ABSL_FLAG(int, max_watchers_per_table, 64, "Most WatchTable streams per table");
+ABSL_FLAG(int, tick_workers, 0, "Threads that tick the tables; 0: one per core");
+ABSL_FLAG(int, max_catchup_ticks, 12,
+          "A table further behind its clock than this slips (runs slower than real time) instead "
+          "of racing to catch up");
+ABSL_FLAG(int, event_log, 512, "Events each table keeps for watchers resuming with from_sequence");
+ABSL_FLAG(int, watcher_backlog, 1024,
+          "Unsent events a watcher may hold before it is resynced (full state, events lost)");
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
-      "sportsim-server [--listen=HOST:PORT] [--port=N]: serves sportsim.v1 (Server, Swing), "
+      "sportsim-server [--listen=HOST:PORT] [--port=N]: serves sportsim.v1 (Server, Swing, Billiards), "
       "gRPC health and reflection. Stops cleanly on SIGINT or SIGTERM. --helpfull lists flags.");
   absl::ParseCommandLine(argc, argv);
 
@@ -34,6 +45,30 @@ int main(int argc, char** argv) {
 
   sportsim::server::ServerConfig config;
   config.listen = absl::GetFlag(FLAGS_listen);
+  config.max_receive_message_bytes = absl::GetFlag(FLAGS_max_request_bytes);
+  config.tables.max_tables = absl::GetFlag(FLAGS_max_tables);
+  config.tables.max_watchers_per_table = absl::GetFlag(FLAGS_max_watchers_per_table);
+  config.tables.workers = absl::GetFlag(FLAGS_tick_workers);
+  config.tables.max_catchup_ticks = absl::GetFlag(FLAGS_max_catchup_ticks);
+  config.tables.event_log = absl::GetFlag(FLAGS_event_log);
+  config.tables.watcher_backlog = absl::GetFlag(FLAGS_watcher_backlog);
+  const struct {
+    const char* name;
+    int value, lo, hi;
+  } checks[] = {{"max_request_bytes", config.max_receive_message_bytes, 1024, 64 << 20},
+                {"max_tables", config.tables.max_tables, 1, 1000000},
+                {"max_watchers_per_table", config.tables.max_watchers_per_table, 1, 100000},
+                {"tick_workers", config.tables.workers, 0, 256},
+                {"max_catchup_ticks", config.tables.max_catchup_ticks, 1, 100000},
+                {"event_log", config.tables.event_log, 1, 10000000},
+                {"watcher_backlog", config.tables.watcher_backlog, 1, 10000000}};
+  for (const auto& c : checks) {
+    if (c.value < c.lo || c.value > c.hi) {
+      std::cerr << "sportsim-server: --" << c.name << " must be in [" << c.lo << ", " << c.hi
+                << "], got " << c.value << "\n";
+      return 2;
+    }
+  }
   if (const int port = absl::GetFlag(FLAGS_port); port >= 0) {
     absl::StatusOr<sportsim::server::ListenAddress> a =
         sportsim::server::ParseListenAddress(config.listen);

@@ -101,7 +101,8 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->host_ = address->host;
   app->services_.push_back(MakeInfoService());
   app->services_.push_back(MakeSwingService());
-  app->services_.push_back(MakeBilliardsService());
+  app->tables_ = std::make_unique<TableRegistry>(config.tables);
+  app->services_.push_back(MakeBilliardsService(app->tables_.get()));
 
   grpc::ServerBuilder builder;
   // Without this, gRPC sets SO_REUSEPORT and a second server would share a busy port silently.
@@ -135,6 +136,7 @@ void ServerApp::Shutdown(absl::Duration grace) {
   if (shut_down_ || server_ == nullptr) return;
   shut_down_ = true;
   server_->GetHealthCheckService()->SetServingStatus(false);
+  tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
   server_->Shutdown(absl::ToChronoTime(absl::Now() + grace));
 }
 

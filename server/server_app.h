@@ -9,6 +9,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "server/tables.h"
 
 namespace grpc {
 class Server;
@@ -21,6 +22,7 @@ struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  ///< host:port ([v6]:port); port 0 = any free port
   int max_receive_message_bytes = 1 << 20;  ///< requests are small: 1 MiB
   int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
+  TableLimits tables;
 };
 
 /// host and port of a listen address.
@@ -41,16 +43,19 @@ class ServerApp {
   ~ServerApp();
 
   int port() const { return port_; }
+  TableRegistry& tables() { return *tables_; }
   std::string address() const;
 
-  /// Marks health NOT_SERVING, stops accepting, lets in-flight calls finish for up to `grace`,
-  /// then cancels what is left. Idempotent.
+  /// Marks health NOT_SERVING, ends every WatchTable stream (UNAVAILABLE after a last
+  /// snapshot), stops accepting, lets in-flight calls finish for up to `grace`, then cancels
+  /// what is left. Idempotent.
   void Shutdown(absl::Duration grace);
   /// Blocks until the server has shut down.
   void Wait();
 
  private:
   ServerApp() = default;
+  std::unique_ptr<TableRegistry> tables_;  // outlives the services (destroyed after them)
   std::vector<std::unique_ptr<grpc::Service>> services_;
   std::unique_ptr<grpc::Server> server_;
   std::string host_;

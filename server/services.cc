@@ -5,6 +5,7 @@
 
 #include "server/billiards_convert.h"
 #include "server/status_util.h"
+#include "server/tables.h"
 #include "sim/billiards/shot.h"
 #include "sim/core/cpu_clock.h"
 #include "server/swing_convert.h"
@@ -84,7 +85,111 @@ class SwingService final : public v1::Swing::CallbackService {
   }
 };
 
+// One WatchTable stream: the registry's Watcher decides what to write and when; this reactor
+// only carries it to gRPC and back.
+class WatchReactor final : public grpc::ServerWriteReactor<v1::TableSnapshot>,
+                           public SnapshotSink {
+ public:
+  WatchReactor(TableRegistry* registry, const v1::WatchTableRequest& request)
+      : registry_(registry), table_id_(request.table_id()) {
+    absl::StatusOr<std::shared_ptr<Watcher>> watcher = registry->Watch(request, this);
+    if (!watcher.ok()) {
+      Finish(ToGrpcStatus(watcher.status()));
+      return;
+    }
+    watcher_ = *std::move(watcher);
+    watcher_->Pump();
+  }
+
+  void SinkWrite(const v1::TableSnapshot* snapshot) override { StartWrite(snapshot); }
+  void SinkWriteLast(const v1::TableSnapshot* snapshot, const absl::Status& status) override {
+    StartWriteAndFinish(snapshot, grpc::WriteOptions(), ToGrpcStatus(status));
+  }
+  void SinkFinish(const absl::Status& status) override { Finish(ToGrpcStatus(status)); }
+
+  void OnWriteDone(bool ok) override { watcher_->OnWriteDone(ok); }
+  void OnCancel() override {
+    if (watcher_ != nullptr) watcher_->OnCancel();
+  }
+  void OnDone() override {
+    if (watcher_ != nullptr) {
+      watcher_->OnDone();
+      registry_->Unwatch(table_id_, watcher_.get());
+    }
+    delete this;
+  }
+
+ private:
+  TableRegistry* const registry_;
+  const std::string table_id_;
+  std::shared_ptr<Watcher> watcher_;
+};
+
+// Unary calls on the registry: the status, or the response.
+template <typename Response, typename Fn>
+grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* ctx, Response* response, Fn fn) {
+  auto* reactor = ctx->DefaultReactor();
+  absl::StatusOr<Response> result = fn();
+  if (result.ok()) *response = *std::move(result);
+  reactor->Finish(ToGrpcStatus(result.status()));
+  return reactor;
+}
+
 class BilliardsService final : public v1::Billiards::CallbackService {
+ public:
+  explicit BilliardsService(TableRegistry* tables) : tables_(tables) {}
+
+ private:
+  TableRegistry* const tables_;
+
+  grpc::ServerUnaryReactor* CreateTable(grpc::CallbackServerContext* ctx,
+                                        const v1::CreateTableRequest* request,
+                                        v1::CreateTableResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->Create(*request); });
+  }
+  grpc::ServerUnaryReactor* GetTable(grpc::CallbackServerContext* ctx,
+                                     const v1::GetTableRequest* request,
+                                     v1::TableInfo* response) override {
+    return Unary(ctx, response, [&] { return tables_->Get(*request); });
+  }
+  grpc::ServerUnaryReactor* ListTables(grpc::CallbackServerContext* ctx,
+                                       const v1::ListTablesRequest* request,
+                                       v1::ListTablesResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->List(*request); });
+  }
+  grpc::ServerUnaryReactor* DeleteTable(grpc::CallbackServerContext* ctx,
+                                        const v1::DeleteTableRequest* request,
+                                        v1::DeleteTableResponse* response) override {
+    return Unary(ctx, response, [&]() -> absl::StatusOr<v1::DeleteTableResponse> {
+      if (absl::Status s = tables_->Delete(*request); !s.ok()) return s;
+      return v1::DeleteTableResponse();
+    });
+  }
+  grpc::ServerUnaryReactor* ResetTable(grpc::CallbackServerContext* ctx,
+                                       const v1::ResetTableRequest* request,
+                                       v1::ResetTableResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->Reset(*request); });
+  }
+  grpc::ServerUnaryReactor* PlaceBall(grpc::CallbackServerContext* ctx,
+                                      const v1::PlaceBallRequest* request,
+                                      v1::PlaceBallResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->Place(*request); });
+  }
+  grpc::ServerUnaryReactor* Shoot(grpc::CallbackServerContext* ctx,
+                                  const v1::ShootRequest* request,
+                                  v1::ShootResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->Shoot(*request); });
+  }
+  grpc::ServerUnaryReactor* SetTurn(grpc::CallbackServerContext* ctx,
+                                    const v1::SetTurnRequest* request,
+                                    v1::SetTurnResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->SetTurn(*request); });
+  }
+  grpc::ServerWriteReactor<v1::TableSnapshot>* WatchTable(
+      grpc::CallbackServerContext*, const v1::WatchTableRequest* request) override {
+    return new WatchReactor(tables_, *request);
+  }
+
   grpc::ServerUnaryReactor* SimulateShot(grpc::CallbackServerContext* ctx,
                                          const v1::SimulateShotRequest* request,
                                          v1::SimulateShotResponse* response) override {
@@ -134,8 +239,8 @@ v1::GetInfoResponse MakeServerInfo() {
 
 std::unique_ptr<grpc::Service> MakeInfoService() { return std::make_unique<InfoService>(); }
 std::unique_ptr<grpc::Service> MakeSwingService() { return std::make_unique<SwingService>(); }
-std::unique_ptr<grpc::Service> MakeBilliardsService() {
-  return std::make_unique<BilliardsService>();
+std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables) {
+  return std::make_unique<BilliardsService>(tables);
 }
 
 }  // namespace sportsim::server

@@ -10,12 +10,15 @@
 
 namespace sportsim::server {
 
+class TableRegistry;
+
 /// The capabilities this build serves (also used by tests).
 v1::GetInfoResponse MakeServerInfo();
 
 std::unique_ptr<grpc::Service> MakeInfoService();
 std::unique_ptr<grpc::Service> MakeSwingService();
-std::unique_ptr<grpc::Service> MakeBilliardsService();
+/// Billiards: SimulateShot and the tables of `tables` (which must outlive the service).
+std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables);
 
 }  // namespace sportsim::server
 

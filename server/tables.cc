@@ -1,0 +1,1125 @@
+#include "server/tables.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <random>
+#include <utility>
+
+#include "absl/strings/str_format.h"
+#include "server/billiards_convert.h"
+#include "server/status_util.h"
+#include "sim/billiards/cue.h"
+#include "sim/billiards/engine.h"
+#include "sim/billiards/referee.h"
+#include "sim/core/check.h"
+
+namespace sportsim::server {
+
+namespace b = ::sportsim::billiards;
+
+// ---------------------------------------------------------------------------------------------
+// Watcher
+
+Watcher::Watcher(std::string table_id, WatchOptions options,
+                 std::shared_ptr<WatchCounters> counters)
+    : table_id_(std::move(table_id)),
+      options_(options),
+      counters_(counters != nullptr ? std::move(counters) : std::make_shared<WatchCounters>()) {}
+
+void Watcher::Attach(SnapshotSink* sink) {
+  absl::MutexLock lock(&mu_);
+  sink_ = sink;
+}
+
+bool Watcher::Offer(std::shared_ptr<const Frame> frame, const std::vector<EventPtr>& events) {
+  absl::MutexLock lock(&mu_);
+  if (finished_ || closing_) return false;
+  if (static_cast<int>(events_.size() + events.size()) > options_.backlog) {
+    // Too far behind: drop what is queued and send the full state with a resync marker.
+    lost_ += events_.size() + events.size();
+    events_.clear();
+    if (!resync_) counters_->resyncs.fetch_add(1);
+    resync_ = true;
+  } else {
+    events_.insert(events_.end(), events.begin(), events.end());
+  }
+  if (frame != nullptr) {
+    if (pending_ != nullptr && !pending_->heartbeat) {
+      ++replaced_;
+      counters_->replaced.fetch_add(1);
+    }
+    pending_ = std::move(frame);
+  }
+  return !in_flight_;
+}
+
+bool Watcher::OfferHeartbeat(std::shared_ptr<const Frame> frame) {
+  absl::MutexLock lock(&mu_);
+  if (finished_ || closing_ || pending_ != nullptr || !events_.empty()) return false;
+  pending_ = std::move(frame);
+  return !in_flight_;
+}
+
+void Watcher::MarkResync() {
+  absl::MutexLock lock(&mu_);
+  if (!resync_) counters_->resyncs.fetch_add(1);
+  resync_ = true;
+}
+
+bool Watcher::Due(int64_t tick) {
+  absl::MutexLock lock(&mu_);
+  const double k = static_cast<double>(tick);
+  if (k < next_due_) return false;
+  next_due_ += options_.interval_ticks;
+  if (next_due_ <= k) next_due_ = k + options_.interval_ticks;
+  return true;
+}
+
+bool Watcher::Close(const absl::Status& status, std::shared_ptr<const Frame> last) {
+  absl::MutexLock lock(&mu_);
+  if (finished_ || closing_) return false;
+  closing_ = true;
+  close_status_ = status;
+  if (last != nullptr) {
+    if (pending_ != nullptr && !pending_->heartbeat) {
+      ++replaced_;
+      counters_->replaced.fetch_add(1);
+    }
+    pending_ = std::move(last);
+  }
+  return !in_flight_;
+}
+
+namespace {
+
+bool SameBall(const b::Ball& x, const b::Ball& y) {
+  return x.state == y.state && x.r == y.r && x.v == y.v && x.w == y.w &&
+         x.q.coeffs() == y.q.coeffs();
+}
+
+}  // namespace
+
+void Watcher::Build(v1::TableSnapshot* out) {
+  out->Clear();
+  out->set_table_id(table_id_);
+  const std::shared_ptr<const Frame> frame = std::move(pending_);
+  pending_ = nullptr;
+  uint64_t sequence = last_sequence_;
+  if (frame != nullptr) {
+    sequence = std::max(sequence, frame->sequence);
+    out->set_tick(frame->tick);
+    out->set_t_s(frame->t_s);
+    out->set_at_rest(frame->at_rest);
+    out->set_turn(frame->turn);
+    out->set_shot_id(frame->shot_id);
+    out->set_heartbeat(frame->heartbeat);
+    if (!frame->heartbeat) {
+      const bool all = !options_.changed_only || resync_ || last_sent_ == nullptr ||
+                       last_sent_->balls.size() != frame->balls.size();
+      for (size_t i = 0; i < frame->balls.size(); ++i) {
+        const b::Ball& ball = frame->balls[i];
+        if (!all && SameBall(ball, last_sent_->balls[i])) continue;
+        v1::BallState* p = out->add_balls();
+        BallToProto(*frame->model, ball, p);
+        if (!options_.position) { p->clear_x_m(); p->clear_y_m(); }
+        if (!options_.velocity) { p->clear_vx_mps(); p->clear_vy_mps(); }
+        if (!options_.spin) { p->clear_wx_rps(); p->clear_wy_rps(); p->clear_wz_rps(); }
+        if (!options_.orientation) { p->clear_qw(); p->clear_qx(); p->clear_qy(); p->clear_qz(); }
+      }
+      last_sent_ = frame;
+    }
+  }
+  for (const EventPtr& e : events_) {
+    *out->add_events() = *e;
+    sequence = std::max(sequence, e->sequence());
+  }
+  events_.clear();
+  out->set_sequence(sequence);
+  last_sequence_ = sequence;
+  out->set_resync(resync_);
+  out->set_events_lost(lost_);
+  out->set_snapshots_replaced(static_cast<uint64_t>(replaced_));
+  resync_ = false;
+  ++sent_;
+  counters_->sent.fetch_add(1);
+}
+
+void Watcher::Pump() {
+  enum { kNothing, kWrite, kWriteLast, kFinish } action = kNothing;
+  SnapshotSink* sink = nullptr;
+  absl::Status status;
+  {
+    absl::MutexLock lock(&mu_);
+    if (sink_ == nullptr || in_flight_ || finished_) return;
+    sink = sink_;
+    if (cancelled_) {
+      finished_ = true;
+      action = kFinish;
+      status = absl::CancelledError("the watcher went away");
+    } else if (pending_ != nullptr || !events_.empty() || resync_) {
+      Build(&out_);
+      in_flight_ = true;
+      if (closing_ && pending_ == nullptr && events_.empty()) {
+        finished_ = true;
+        action = kWriteLast;
+        status = close_status_;
+      } else {
+        action = kWrite;
+      }
+    } else if (closing_) {
+      finished_ = true;
+      action = kFinish;
+      status = close_status_;
+    }
+  }
+  // The sink is alive: it is only destroyed after it was finished (OnDone), and we are the
+  // ones who decide to finish it.
+  switch (action) {
+    case kNothing: break;
+    case kWrite: sink->SinkWrite(&out_); break;
+    case kWriteLast: sink->SinkWriteLast(&out_, status); break;
+    case kFinish: sink->SinkFinish(status); break;
+  }
+}
+
+void Watcher::OnWriteDone(bool ok) {
+  {
+    absl::MutexLock lock(&mu_);
+    in_flight_ = false;
+    if (!ok) cancelled_ = true;  // the stream broke: finish it
+  }
+  Pump();
+}
+
+void Watcher::OnCancel() {
+  {
+    absl::MutexLock lock(&mu_);
+    cancelled_ = true;
+  }
+  Pump();
+}
+
+void Watcher::OnDone() {
+  absl::MutexLock lock(&mu_);
+  sink_ = nullptr;
+  finished_ = true;
+  pending_ = nullptr;
+  events_.clear();
+  last_sent_ = nullptr;
+}
+
+int64_t Watcher::sent() const {
+  absl::MutexLock lock(&mu_);
+  return sent_;
+}
+int64_t Watcher::replaced() const {
+  absl::MutexLock lock(&mu_);
+  return replaced_;
+}
+bool Watcher::closed() const {
+  absl::MutexLock lock(&mu_);
+  return finished_ || closing_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Table
+
+struct SeatEntry {
+  std::string name;
+  std::string token;
+};
+
+struct Table {
+  // Fixed at creation.
+  std::string id;
+  std::string preset;
+  std::string rack;
+  std::shared_ptr<const b::TableModel> model;
+  b::TableState initial;
+  b::SolverOptions solver;
+  double tick_hz = 120.0;
+  double period_s = 1.0 / 120.0;
+  int64_t steps_per_tick = 0;  // stepped engine: dt_s * steps_per_tick = period
+  std::vector<SeatEntry> seats;
+
+  absl::Mutex mu;
+  SteadyClock::time_point origin ABSL_GUARDED_BY(mu);  // tick 0 (moves on when the table slips)
+  int64_t tick ABSL_GUARDED_BY(mu) = 0;                 // last tick advanced or acted on
+  uint64_t sequence ABSL_GUARDED_BY(mu) = 0;
+  uint32_t turn ABSL_GUARDED_BY(mu) = 0;
+  b::TableState rest ABSL_GUARDED_BY(mu);                // the balls when no shot moves
+  std::unique_ptr<b::TableSimulation> sim ABSL_GUARDED_BY(mu);  // the shot in progress
+  std::unique_ptr<b::ShotReferee> referee ABSL_GUARDED_BY(mu);
+  b::TableState shot_start ABSL_GUARDED_BY(mu);  // ids for the shot's events
+  v1::ShotSummary current ABSL_GUARDED_BY(mu);   // the shot in progress
+  v1::ShotSummary last_shot ABSL_GUARDED_BY(mu);
+  uint64_t shots ABSL_GUARDED_BY(mu) = 0;
+  std::deque<EventPtr> log ABSL_GUARDED_BY(mu);
+  uint64_t evicted_sequence ABSL_GUARDED_BY(mu) = 0;  // highest sequence no longer held
+  std::vector<std::shared_ptr<Watcher>> watchers ABSL_GUARDED_BY(mu);
+  bool deleted ABSL_GUARDED_BY(mu) = false;
+  uint64_t wake_generation ABSL_GUARDED_BY(mu) = 0;
+
+  SteadyClock::time_point Deadline(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    return origin + std::chrono::nanoseconds(std::llround(static_cast<double>(k) * 1e9 / tick_hz));
+  }
+  // The tick the clock is at (never behind the last tick advanced).
+  int64_t ClockTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
+    return std::max(tick, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
+  }
+  double TableTime(int64_t k) const { return static_cast<double>(k) * period_s; }
+  // The shot's own time at tick k.
+  double ShotTime(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    const int64_t n = k - current.start_tick();
+    if (steps_per_tick > 0) return static_cast<double>(n * steps_per_tick) * solver.dt_s;
+    return static_cast<double>(n) * period_s;
+  }
+  const b::TableState& Balls() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    return sim != nullptr ? sim->state() : rest;
+  }
+  std::shared_ptr<const Frame> MakeFrame(int64_t k, bool heartbeat)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    auto f = std::make_shared<Frame>();
+    f->sequence = sequence;
+    f->tick = k;
+    f->t_s = TableTime(k);
+    f->at_rest = sim == nullptr;
+    f->heartbeat = heartbeat;
+    f->turn = turn;
+    f->shot_id = current.shot_id();
+    f->model = model;
+    if (!heartbeat) f->balls = Balls().balls;
+    return f;
+  }
+  // Seat of a token, or -1. Compares every seat in full (no early exit on the first byte).
+  int SeatOf(const std::string& token) const {
+    int seat = -1;
+    for (size_t i = 0; i < seats.size(); ++i) {
+      const std::string& t = seats[i].token;
+      unsigned diff = t.size() != token.size() ? 1u : 0u;
+      for (size_t j = 0; j < t.size(); ++j) {
+        diff |= static_cast<unsigned char>(t[j]) ^
+                static_cast<unsigned char>(j < token.size() ? token[j] : 0);
+      }
+      if (diff == 0) seat = static_cast<int>(i);
+    }
+    return seat;
+  }
+  EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    e.set_sequence(sequence);
+    auto p = std::make_shared<const v1::TableEvent>(std::move(e));
+    log.push_back(p);
+    while (static_cast<int>(log.size()) > event_log) {
+      evicted_sequence = log.front()->sequence();
+      log.pop_front();
+    }
+    return p;
+  }
+};
+
+namespace {
+
+std::string RandomHex(int bytes) {
+  static absl::Mutex mu(absl::kConstInit);
+  static std::random_device* device = new std::random_device();
+  absl::MutexLock lock(&mu);
+  std::string out;
+  for (int i = 0; i < bytes; i += 4) {
+    const uint32_t v = (*device)();
+    out += absl::StrFormat("%08x", v);
+  }
+  return out.substr(0, 2 * bytes);
+}
+
+absl::Status Unavailable() { return absl::UnavailableError("the server is shutting down"); }
+
+absl::Status CheckTableId(const std::string& id) {
+  if (id.empty() || id.size() > 64) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "table_id must be 1 to 64 characters, got %d characters", static_cast<int>(id.size())));
+  }
+  return absl::OkStatus();
+}
+
+absl::Status CheckToken(const std::string& token) {
+  if (token.empty() || token.size() > 128) {
+    return absl::InvalidArgumentError("token: give the seat's token (CreateTable returned it)");
+  }
+  return absl::OkStatus();
+}
+
+v1::TableEvent TableEvent(v1::EventKind kind, double t_s, uint64_t shot_id) {
+  v1::TableEvent e;
+  e.set_kind(kind);
+  e.set_t_s(t_s);
+  e.set_shot_id(shot_id);
+  return e;
+}
+
+// The largest step <= 1/960 s that divides the tick period (the stepped engine's default).
+constexpr double kDefaultSteppedDt = 1.0 / 960.0;
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Registry
+
+TableRegistry::TableRegistry(TableLimits limits)
+    : limits_(limits), counters_(std::make_shared<WatchCounters>()) {
+  int n = limits_.workers;
+  if (n <= 0) n = std::max(1u, std::thread::hardware_concurrency());
+  for (int i = 0; i < n; ++i) workers_.emplace_back([this] { WorkerLoop(); });
+}
+
+TableRegistry::~TableRegistry() { Shutdown(absl::UnavailableError("the server is shutting down")); }
+
+absl::StatusOr<std::shared_ptr<Table>> TableRegistry::Find(const std::string& id) {
+  if (absl::Status s = CheckTableId(id); !s.ok()) return s;
+  absl::MutexLock lock(&mu_);
+  if (shut_down_) return Unavailable();
+  auto it = tables_.find(id);
+  if (it == tables_.end()) {
+    return absl::NotFoundError(absl::StrFormat("table_id: no table \"%s\"", id));
+  }
+  return it->second;
+}
+
+void TableRegistry::Schedule(Table& t, const std::shared_ptr<Table>& ptr,
+                             SteadyClock::time_point when) {
+  const uint64_t generation = ++t.wake_generation;
+  absl::MutexLock lock(&sched_mu_);
+  const bool earliest = wakes_.empty() || when < wakes_.top().when;
+  wakes_.push(Wake{when, generation, ptr});
+  if (earliest) sched_cv_.Signal();
+}
+
+absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
+    const v1::CreateTableRequest& request) {
+  const double tick_hz = request.tick_hz() == 0 ? 120.0 : request.tick_hz();
+  if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 1000, false); !s.ok()) {
+    return s;
+  }
+  int n_seats = request.seats() != 0 ? static_cast<int>(request.seats())
+                                     : std::max(2, request.seat_names_size());
+  if (request.seats() > 16 || n_seats > 16) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("seats must be in [1, 16], got %d", n_seats));
+  }
+  if (request.seat_names_size() > 0 && request.seat_names_size() != n_seats) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "seat_names: %d names for %d seats", request.seat_names_size(), n_seats));
+  }
+  for (int i = 0; i < request.seat_names_size(); ++i) {
+    if (absl::Status s = CheckId(absl::StrFormat("seat_names[%d]", i), request.seat_names(i));
+        !s.ok()) {
+      return s;
+    }
+  }
+  absl::StatusOr<TableBuild> build = TableFromProto(request.table());
+  if (!build.ok()) return build.status();
+  absl::StatusOr<b::SolverOptions> solver = SolverFromProto(request.solver());
+  if (!solver.ok()) return solver.status();
+
+  auto table = std::make_shared<Table>();
+  table->tick_hz = tick_hz;
+  table->period_s = 1.0 / tick_hz;
+  if (solver->engine == b::Engine::kStepped) {
+    // Ticks must end on the step grid, so that a shot's states do not depend on the ticks.
+    if (!request.solver().has_dt_s()) {
+      solver->dt_s = table->period_s / std::ceil(table->period_s / kDefaultSteppedDt - 1e-9);
+    }
+    const double n = table->period_s / solver->dt_s;
+    const double rounded = std::round(n);
+    if (rounded < 1 || std::abs(n - rounded) > 1e-9 * n) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "solver.dt_s: the stepped engine's step must divide the tick period 1/%g s, got %g s "
+          "(%.6g steps per tick)",
+          tick_hz, solver->dt_s, n));
+    }
+    table->steps_per_tick = static_cast<int64_t>(rounded);
+  }
+  {
+    // Options are checked by the engine: try them once on the table at rest.
+    std::vector<b::Event> ignored;
+    absl::StatusOr<std::unique_ptr<b::TableSimulation>> probe =
+        b::TableSimulation::Create(build->model, *solver, build->state, &ignored);
+    if (!probe.ok()) return PrefixStatus("solver: ", probe.status());
+  }
+  table->preset = request.table().preset().empty() ? "pool-9ft" : request.table().preset();
+  table->rack = build->rack;
+  table->model = std::make_shared<const b::TableModel>(std::move(build->model));
+  table->initial = build->state;
+  table->solver = *solver;
+  v1::CreateTableResponse response;
+  for (int i = 0; i < n_seats; ++i) {
+    SeatEntry seat{.name = request.seat_names_size() > 0 ? request.seat_names(i)
+                                                           : absl::StrFormat("%d", i),
+                   .token = RandomHex(16)};
+    v1::Seat* out = response.add_seats();
+    out->set_seat(static_cast<uint32_t>(i));
+    out->set_name(seat.name);
+    out->set_token(seat.token);
+    table->seats.push_back(std::move(seat));
+  }
+  {
+    absl::MutexLock lock(&table->mu);
+    table->origin = SteadyClock::now();
+    table->rest = table->initial;
+  }
+  absl::MutexLock lock(&mu_);
+  if (shut_down_) return Unavailable();
+  if (static_cast<int>(tables_.size()) >= limits_.max_tables) {
+    return absl::ResourceExhaustedError(absl::StrFormat(
+        "the server holds its maximum of %d tables (--max_tables)", limits_.max_tables));
+  }
+  do {
+    table->id = "t-" + RandomHex(6);
+  } while (tables_.count(table->id) > 0);
+  tables_[table->id] = table;
+  response.set_table_id(table->id);
+  response.set_tick_hz(tick_hz);
+  response.set_engine(solver->engine == b::Engine::kEvent ? "event" : "stepped");
+  if (solver->engine == b::Engine::kStepped) response.set_dt_s(solver->dt_s);
+  response.set_tick(0);
+  return response;
+}
+
+absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& request) {
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  if (!found.ok()) return found.status();
+  Table& t = **found;
+  absl::MutexLock lock(&t.mu);
+  v1::TableInfo info;
+  info.set_table_id(t.id);
+  info.set_preset(t.preset);
+  info.set_rack(t.rack);
+  info.set_tick_hz(t.tick_hz);
+  const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+  info.set_tick(tick);
+  info.set_t_s(t.TableTime(tick));
+  info.set_sequence(t.sequence);
+  info.set_at_rest(t.sim == nullptr);
+  info.set_turn(t.turn);
+  for (size_t i = 0; i < t.seats.size(); ++i) {
+    v1::Seat* s = info.add_seats();
+    s->set_seat(static_cast<uint32_t>(i));
+    s->set_name(t.seats[i].name);
+  }
+  for (const b::Ball& ball : t.Balls().balls) BallToProto(*t.model, ball, info.add_balls());
+  info.set_shots(t.shots);
+  *info.mutable_last_shot() = t.last_shot;
+  info.set_watchers(static_cast<uint32_t>(t.watchers.size()));
+  info.set_engine(t.solver.engine == b::Engine::kEvent ? "event" : "stepped");
+  if (t.solver.engine == b::Engine::kStepped) info.set_dt_s(t.solver.dt_s);
+  if (request.include_geometry()) GeometryToProto(*t.model, info.mutable_geometry());
+  return info;
+}
+
+absl::StatusOr<v1::ListTablesResponse> TableRegistry::List(const v1::ListTablesRequest& request) {
+  if (request.page_size() > 1000) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("page_size must be in [0, 1000], got %d", request.page_size()));
+  }
+  const size_t page = request.page_size() == 0 ? 100 : request.page_size();
+  std::vector<std::shared_ptr<Table>> tables;
+  v1::ListTablesResponse response;
+  {
+    absl::MutexLock lock(&mu_);
+    if (shut_down_) return Unavailable();
+    response.set_total(static_cast<uint32_t>(tables_.size()));
+    for (auto it = tables_.upper_bound(request.page_token());
+         it != tables_.end() && tables.size() <= page; ++it) {
+      tables.push_back(it->second);
+    }
+  }
+  if (tables.size() > page) {
+    tables.pop_back();
+    response.set_next_page_token(tables.back()->id);
+  }
+  const SteadyClock::time_point now = SteadyClock::now();
+  for (const std::shared_ptr<Table>& p : tables) {
+    Table& t = *p;
+    absl::MutexLock lock(&t.mu);
+    v1::TableBrief* brief = response.add_tables();
+    brief->set_table_id(t.id);
+    brief->set_preset(t.preset);
+    brief->set_at_rest(t.sim == nullptr);
+    brief->set_tick(t.sim != nullptr ? t.tick : t.ClockTick(now));
+    uint32_t on = 0;
+    for (const b::Ball& ball : t.Balls().balls) on += ball.state != b::MotionState::kPocketed;
+    brief->set_balls_on_table(on);
+    brief->set_seats(static_cast<uint32_t>(t.seats.size()));
+    brief->set_watchers(static_cast<uint32_t>(t.watchers.size()));
+    brief->set_shots(t.shots);
+  }
+  return response;
+}
+
+absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
+  if (absl::Status s = CheckTableId(request.table_id()); !s.ok()) return s;
+  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
+  std::shared_ptr<Table> table;
+  {
+    absl::MutexLock lock(&mu_);
+    if (shut_down_) return Unavailable();
+    auto it = tables_.find(request.table_id());
+    if (it == tables_.end()) {
+      return absl::NotFoundError(absl::StrFormat("table_id: no table \"%s\"", request.table_id()));
+    }
+    table = it->second;
+    // The token is checked before anything changes.
+    if (table->SeatOf(request.token()) < 0) {
+      return absl::PermissionDeniedError("token: not a seat of this table");
+    }
+    tables_.erase(it);
+  }
+  std::vector<std::shared_ptr<Watcher>> pump;
+  {
+    absl::MutexLock lock(&table->mu);
+    table->deleted = true;
+    if (table->sim != nullptr) moving_.fetch_sub(1);
+    const std::shared_ptr<const Frame> last =
+        table->MakeFrame(table->sim != nullptr ? table->tick : table->ClockTick(SteadyClock::now()),
+                         false);
+    const absl::Status gone =
+        absl::NotFoundError(absl::StrFormat("table %s was deleted", table->id));
+    for (const std::shared_ptr<Watcher>& w : table->watchers) {
+      if (w->Close(gone, last)) pump.push_back(w);
+    }
+    table->sim = nullptr;
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  return absl::OkStatus();
+}
+
+namespace {
+
+// Ends the shot in progress: a summary, the shot_end event, the balls at rest.
+void EndShot(Table& t, int64_t end_tick, const std::string& error, int event_log,
+             std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  if (t.sim == nullptr) return;
+  b::TableState state = t.sim->state();
+  if (!error.empty()) {
+    // Frozen where the engine stopped: every ball still moving is put at rest.
+    for (b::Ball& ball : state.balls) {
+      if (ball.state == b::MotionState::kPocketed) continue;
+      ball.v.setZero();
+      ball.w.setZero();
+      ball.state = b::MotionState::kStationary;
+    }
+  }
+  state.t_s = 0.0;
+  v1::ShotSummary& s = t.current;
+  if (t.referee != nullptr) {
+    const b::ShotFacts& f = t.referee->facts();
+    if (f.first_hit >= 0) s.set_first_ball_hit(state.balls[f.first_hit].id);
+    s.set_rails(static_cast<uint32_t>(f.rails));
+    s.set_rails_after_contact(static_cast<uint32_t>(f.rails_after_contact));
+    for (int i : f.pocketed) s.add_pocketed(state.balls[i].id);
+    s.set_struck_ball_pocketed(f.struck_pocketed);
+  }
+  s.set_end_tick(end_tick);
+  s.set_duration_s(t.ShotTime(end_tick));
+  s.set_events(t.sim->events_processed());
+  s.set_error(error);
+  t.last_shot = s;
+  t.rest = std::move(state);
+  t.sim = nullptr;
+  t.referee = nullptr;
+  v1::TableEvent e = TableEvent(v1::shot_end, t.TableTime(end_tick), s.shot_id());
+  e.set_seat(s.seat());
+  e.add_balls(s.struck_ball());
+  *e.mutable_summary() = s;
+  fresh->push_back(t.Log(std::move(e), event_log));
+}
+
+}  // namespace
+
+absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTableRequest& request) {
+  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  if (!found.ok()) return found.status();
+  Table& t = **found;
+  std::vector<std::shared_ptr<Watcher>> pump;
+  v1::ResetTableResponse response;
+  {
+    absl::MutexLock lock(&t.mu);
+    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    const int seat = t.SeatOf(request.token());
+    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
+    const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+    ++t.sequence;
+    std::vector<EventPtr> fresh;
+    if (t.sim != nullptr) {
+      EndShot(t, tick, "the table was reset during the shot", limits_.event_log, &fresh);
+      moving_.fetch_sub(1);
+    }
+    t.rest = t.initial;
+    t.tick = tick;
+    v1::TableEvent e = TableEvent(v1::table_reset, t.TableTime(tick), 0);
+    e.set_seat(static_cast<uint32_t>(seat));
+    fresh.push_back(t.Log(std::move(e), limits_.event_log));
+    events_.fetch_add(static_cast<int64_t>(fresh.size()));
+    const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
+    for (const std::shared_ptr<Watcher>& w : t.watchers) {
+      if (w->Offer(frame, fresh)) pump.push_back(w);
+    }
+    response.set_sequence(t.sequence);
+    response.set_tick(tick);
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  return response;
+}
+
+absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRequest& request) {
+  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
+  const v1::BallPlacement& p = request.ball();
+  if (absl::Status s = CheckId("ball.id", p.id()); !s.ok()) return s;
+  if (!std::isfinite(p.x_m()) || !std::isfinite(p.y_m())) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("ball: x_m and y_m must be finite, got (%g, %g)", p.x_m(), p.y_m()));
+  }
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  if (!found.ok()) return found.status();
+  Table& t = **found;
+  std::vector<std::shared_ptr<Watcher>> pump;
+  v1::PlaceBallResponse response;
+  {
+    absl::MutexLock lock(&t.mu);
+    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    const int seat = t.SeatOf(request.token());
+    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
+    if (seat != static_cast<int>(t.turn)) {
+      return absl::PermissionDeniedError(absl::StrFormat(
+          "token: it is seat %d's turn, not seat %d's", t.turn, seat));
+    }
+    if (t.sim != nullptr) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "balls are still moving (shot %d); place balls when every ball is at rest",
+          t.current.shot_id()));
+    }
+    b::TableState state = t.rest;
+    int k = state.Find(p.id());
+    if (k < 0) {
+      if (static_cast<int>(state.balls.size()) >= kMaxBalls) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("ball.id: a table holds at most %d balls", kMaxBalls));
+      }
+      state.balls.push_back(b::Ball{.id = p.id()});
+      k = static_cast<int>(state.balls.size()) - 1;
+    }
+    b::Ball& ball = state.balls[k];
+    ball.r = Eigen::Vector3d(p.x_m(), p.y_m(), t.model->radius());
+    ball.v.setZero();
+    ball.w.setZero();
+    ball.state = b::MotionState::kStationary;
+    ball.pocket = -1;
+    if (absl::Status s = b::ValidateLayout(*t.model, state); !s.ok()) {
+      return PrefixStatus("ball: ", s);
+    }
+    for (const b::Pocket& pocket : t.model->spec().pockets) {
+      if ((ball.r.head<2>() - pocket.centre).norm() < pocket.radius_m) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "ball: (%g, %g) m is inside pocket %s's capture circle", p.x_m(), p.y_m(),
+            pocket.name));
+      }
+    }
+    const int64_t tick = t.ClockTick(SteadyClock::now());
+    t.tick = tick;
+    t.rest = std::move(state);
+    ++t.sequence;
+    v1::TableEvent e = TableEvent(v1::ball_placed, t.TableTime(tick), 0);
+    e.set_seat(static_cast<uint32_t>(seat));
+    e.add_balls(p.id());
+    std::vector<EventPtr> fresh{t.Log(std::move(e), limits_.event_log)};
+    events_.fetch_add(1);
+    const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
+    for (const std::shared_ptr<Watcher>& w : t.watchers) {
+      if (w->Offer(frame, fresh)) pump.push_back(w);
+    }
+    response.set_sequence(t.sequence);
+    response.set_tick(tick);
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  return response;
+}
+
+absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& request) {
+  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
+  if (!request.has_strike()) return absl::InvalidArgumentError("strike: required");
+  absl::StatusOr<b::CueStrike> strike = StrikeFromProto(request.strike());
+  if (!strike.ok()) return strike.status();
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  if (!found.ok()) return found.status();
+  const std::shared_ptr<Table>& ptr = *found;
+  Table& t = *ptr;
+  std::vector<std::shared_ptr<Watcher>> pump;
+  v1::ShootResponse response;
+  {
+    absl::MutexLock lock(&t.mu);
+    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    const int seat = t.SeatOf(request.token());
+    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
+    if (seat != static_cast<int>(t.turn)) {
+      return absl::PermissionDeniedError(absl::StrFormat(
+          "token: it is seat %d's turn, not seat %d's", t.turn, seat));
+    }
+    if (request.has_next_seat() && request.next_seat() >= t.seats.size()) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "next_seat must be in [0, %d], got %d", t.seats.size() - 1, request.next_seat()));
+    }
+    if (t.sim != nullptr) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "balls are still moving (shot %d): shoot when every ball is at rest",
+          t.current.shot_id()));
+    }
+    const std::string id = request.strike().ball().empty() ? "cue" : request.strike().ball();
+    const int cue = t.rest.Find(id);
+    if (cue < 0) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("strike.ball: no ball \"%s\" on the table", id));
+    }
+    if (t.rest.balls[cue].state == b::MotionState::kPocketed) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "strike.ball: ball \"%s\" is pocketed; put it back with PlaceBall first", id));
+    }
+    b::TableState state = t.rest;
+    state.t_s = 0.0;
+    absl::StatusOr<b::StrikeOutcome> outcome =
+        b::ApplyStrike(*t.model, t.solver.disabled, *strike, cue, &state);
+    if (!outcome.ok()) return PrefixStatus("strike.", outcome.status());
+    std::vector<b::Event> events;
+    absl::StatusOr<std::unique_ptr<b::TableSimulation>> sim =
+        b::TableSimulation::Create(*t.model, t.solver, std::move(state), &events);
+    if (!sim.ok()) return sim.status();
+
+    // Accepted: from here on nothing fails.
+    const SteadyClock::time_point now = SteadyClock::now();
+    const int64_t start = t.ClockTick(now) + 1;
+    t.tick = start;
+    ++t.sequence;
+    ++t.shots;
+    const uint64_t shot_id = t.shots;
+    t.current.Clear();
+    t.current.set_shot_id(shot_id);
+    t.current.set_seat(static_cast<uint32_t>(seat));
+    t.current.set_struck_ball(id);
+    t.current.set_start_tick(start);
+    t.sim = *std::move(sim);
+    t.referee = std::make_unique<b::ShotReferee>(cue);
+    t.shot_start = t.rest;
+    moving_.fetch_add(1);
+    std::vector<EventPtr> fresh;
+    v1::TableEvent e = TableEvent(v1::shot, t.TableTime(start), shot_id);
+    e.set_seat(static_cast<uint32_t>(seat));
+    e.add_balls(id);
+    fresh.push_back(t.Log(std::move(e), limits_.event_log));
+    for (const b::Event& be : events) {
+      t.referee->Observe(be);
+      v1::TableEvent pe;
+      EventToProto(*t.model, t.shot_start, be, &pe);
+      pe.set_t_s(t.TableTime(start) + be.t_s);
+      pe.set_shot_id(shot_id);
+      fresh.push_back(t.Log(std::move(pe), limits_.event_log));
+    }
+    if (request.has_next_seat() && request.next_seat() != t.turn) {
+      t.turn = request.next_seat();
+      v1::TableEvent te = TableEvent(v1::turn, t.TableTime(start), shot_id);
+      te.set_seat(t.turn);
+      fresh.push_back(t.Log(std::move(te), limits_.event_log));
+    }
+    events_.fetch_add(static_cast<int64_t>(fresh.size()));
+    const std::shared_ptr<const Frame> frame = t.MakeFrame(start, false);
+    for (const std::shared_ptr<Watcher>& w : t.watchers) {
+      if (w->Offer(frame, fresh)) pump.push_back(w);
+    }
+    response.set_shot_id(shot_id);
+    response.set_start_tick(start);
+    StrikeReportToProto(*outcome, response.mutable_strike());
+    Schedule(t, ptr, t.Deadline(start + 1));
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  return response;
+}
+
+absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequest& request) {
+  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  if (!found.ok()) return found.status();
+  Table& t = **found;
+  std::vector<std::shared_ptr<Watcher>> pump;
+  v1::SetTurnResponse response;
+  {
+    absl::MutexLock lock(&t.mu);
+    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    const int seat = t.SeatOf(request.token());
+    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
+    if (seat != static_cast<int>(t.turn)) {
+      return absl::PermissionDeniedError(absl::StrFormat(
+          "token: it is seat %d's turn, not seat %d's: only the seat to play passes the turn",
+          t.turn, seat));
+    }
+    if (request.seat() >= t.seats.size()) {
+      return absl::InvalidArgumentError(absl::StrFormat("seat must be in [0, %d], got %d",
+                                                        t.seats.size() - 1, request.seat()));
+    }
+    if (request.seat() != t.turn) {
+      const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+      ++t.sequence;
+      t.turn = request.seat();
+      v1::TableEvent e = TableEvent(v1::turn, t.TableTime(tick), t.current.shot_id());
+      e.set_seat(t.turn);
+      std::vector<EventPtr> fresh{t.Log(std::move(e), limits_.event_log)};
+      events_.fetch_add(1);
+      // At rest the turn goes out now; while balls move it rides with the next snapshot.
+      const std::shared_ptr<const Frame> frame =
+          t.sim == nullptr ? t.MakeFrame(tick, false) : nullptr;
+      for (const std::shared_ptr<Watcher>& w : t.watchers) {
+        if (w->Offer(frame, fresh)) pump.push_back(w);
+      }
+    }
+    response.set_sequence(t.sequence);
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  return response;
+}
+
+absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
+    const v1::WatchTableRequest& request, SnapshotSink* sink) {
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  if (!found.ok()) return found.status();
+  const std::shared_ptr<Table>& ptr = *found;
+  Table& t = *ptr;
+  WatchOptions options;
+  options.changed_only = request.changed_only();
+  options.backlog = limits_.watcher_backlog;
+  if (request.rate_hz() != 0) {
+    if (absl::Status s = CheckFiniteInRange("rate_hz", request.rate_hz(), 0, true, t.tick_hz,
+                                            false);
+        !s.ok()) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s (the table's tick rate is the most; 0 means it)", s.message()));
+    }
+    options.interval_ticks = t.tick_hz / request.rate_hz();
+  }
+  if (request.fields_size() > 0) {
+    options.position = options.velocity = options.spin = options.orientation = false;
+    for (int i = 0; i < request.fields_size(); ++i) {
+      switch (request.fields(i)) {
+        case v1::SNAPSHOT_FIELD_POSITION: options.position = true; break;
+        case v1::SNAPSHOT_FIELD_VELOCITY: options.velocity = true; break;
+        case v1::SNAPSHOT_FIELD_SPIN: options.spin = true; break;
+        case v1::SNAPSHOT_FIELD_ORIENTATION: options.orientation = true; break;
+        default:
+          return absl::InvalidArgumentError(
+              absl::StrFormat("fields[%d]: unknown field %d", i, request.fields(i)));
+      }
+    }
+  }
+  auto watcher = std::make_shared<Watcher>(t.id, options, counters_);
+  watcher->Attach(sink);
+  {
+    absl::MutexLock lock(&t.mu);
+    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    if (static_cast<int>(t.watchers.size()) >= limits_.max_watchers_per_table) {
+      return absl::ResourceExhaustedError(absl::StrFormat(
+          "table %s has its maximum of %d watchers (--max_watchers_per_table)", t.id,
+          limits_.max_watchers_per_table));
+    }
+    std::vector<EventPtr> replay;
+    if (request.has_from_sequence()) {
+      if (request.from_sequence() > t.sequence) {
+        return absl::OutOfRangeError(absl::StrFormat(
+            "from_sequence %d is ahead of the table's sequence %d", request.from_sequence(),
+            t.sequence));
+      }
+      if (t.evicted_sequence > request.from_sequence()) watcher->MarkResync();
+      for (const EventPtr& e : t.log) {
+        if (e->sequence() > request.from_sequence()) replay.push_back(e);
+      }
+    }
+    const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+    watcher->Due(tick);  // the first snapshot is now
+    watcher->Offer(t.MakeFrame(tick, false), replay);
+    t.watchers.push_back(watcher);
+    if (t.sim == nullptr && t.watchers.size() == 1) {
+      Schedule(t, ptr, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
+    }
+  }
+  return watcher;
+}
+
+void TableRegistry::Unwatch(const std::string& table_id, const Watcher* watcher) {
+  std::shared_ptr<Table> table;
+  {
+    absl::MutexLock lock(&mu_);
+    auto it = tables_.find(table_id);
+    if (it == tables_.end()) return;
+    table = it->second;
+  }
+  absl::MutexLock lock(&table->mu);
+  auto& ws = table->watchers;
+  ws.erase(std::remove_if(ws.begin(), ws.end(),
+                          [watcher](const std::shared_ptr<Watcher>& w) { return w.get() == watcher; }),
+           ws.end());
+}
+
+void TableRegistry::WorkerLoop() {
+  for (;;) {
+    Wake wake;
+    {
+      absl::MutexLock lock(&sched_mu_);
+      for (;;) {
+        if (stopping_) return;
+        if (wakes_.empty()) {
+          sched_cv_.Wait(&sched_mu_);
+          continue;
+        }
+        const SteadyClock::time_point now = SteadyClock::now();
+        if (wakes_.top().when <= now) break;
+        sched_cv_.WaitWithTimeout(
+            &sched_mu_, absl::FromChrono(wakes_.top().when - now));
+      }
+      wake = wakes_.top();
+      wakes_.pop();
+      // Another worker may be waiting for the next one.
+      if (!wakes_.empty()) sched_cv_.Signal();
+    }
+    Process(wake.table, wake.generation, SteadyClock::now());
+  }
+}
+
+void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generation,
+                            SteadyClock::time_point now) {
+  Table& t = *ptr;
+  std::vector<std::shared_ptr<Watcher>> pump;
+  {
+    absl::MutexLock lock(&t.mu);
+    if (t.deleted || generation != t.wake_generation) return;  // superseded
+    if (t.sim == nullptr) {
+      // At rest: a heartbeat for the watchers, then sleep until the next one.
+      if (t.watchers.empty()) return;
+      const std::shared_ptr<const Frame> beat = t.MakeFrame(t.ClockTick(now), true);
+      for (const std::shared_ptr<Watcher>& w : t.watchers) {
+        if (w->OfferHeartbeat(beat)) pump.push_back(w);
+      }
+      Schedule(t, ptr, now + absl::ToChronoNanoseconds(limits_.heartbeat));
+    } else {
+      const double ns = std::chrono::duration<double, std::nano>(now - t.origin).count();
+      const int64_t due = static_cast<int64_t>(std::floor(ns * t.tick_hz * 1e-9));
+      if (due <= t.tick) {
+        Schedule(t, ptr, t.Deadline(t.tick + 1));
+      } else {
+        int64_t target = due;
+        if (due - t.tick > limits_.max_catchup_ticks) {
+          // Too far behind to catch up: the table's clock slips (it runs slower than real
+          // time for a moment) instead of spending ever more ticks on being late.
+          const int64_t slip = due - t.tick - limits_.max_catchup_ticks;
+          t.origin += std::chrono::nanoseconds(
+              std::llround(static_cast<double>(slip) * 1e9 / t.tick_hz));
+          slipped_ticks_.fetch_add(slip);
+          late_ticks_.fetch_add(slip);
+          target = t.tick + limits_.max_catchup_ticks;
+        }
+        // Late: advanced more than a period after its deadline.
+        const int64_t late = std::min(target, due - 1) - t.tick;
+        if (late > 0) late_ticks_.fetch_add(late);
+        ticks_.fetch_add(target - t.tick);
+        std::vector<b::Event> events;
+        std::string error;
+        absl::Status st = t.sim->AdvanceTo(t.ShotTime(target), &events);
+        if (!st.ok()) {
+          error = std::string(st.message());
+        } else if (t.ShotTime(target) > limits_.max_shot_s && !t.sim->AtRest()) {
+          error = absl::StrFormat("the shot was stopped after %g s of simulated time",
+                                  limits_.max_shot_s);
+        }
+        t.tick = target;
+        ++t.sequence;
+        std::vector<EventPtr> fresh;
+        const double start_t = t.TableTime(t.current.start_tick());
+        for (const b::Event& be : events) {
+          t.referee->Observe(be);
+          v1::TableEvent pe;
+          EventToProto(*t.model, t.shot_start, be, &pe);
+          pe.set_t_s(start_t + be.t_s);
+          pe.set_shot_id(t.current.shot_id());
+          fresh.push_back(t.Log(std::move(pe), limits_.event_log));
+        }
+        const bool ended = !error.empty() || t.sim->AtRest();
+        if (ended) {
+          EndShot(t, target, error, limits_.event_log, &fresh);
+          moving_.fetch_sub(1);
+        }
+        events_.fetch_add(static_cast<int64_t>(fresh.size()));
+        std::shared_ptr<const Frame> frame;
+        for (const std::shared_ptr<Watcher>& w : t.watchers) {
+          const bool due_now = w->Due(target) || ended;
+          if (due_now && frame == nullptr) frame = t.MakeFrame(target, false);
+          if (w->Offer(due_now ? frame : nullptr, fresh)) pump.push_back(w);
+        }
+        if (!ended) {
+          Schedule(t, ptr, t.Deadline(t.tick + 1));
+        } else if (!t.watchers.empty()) {
+          Schedule(t, ptr, now + absl::ToChronoNanoseconds(limits_.heartbeat));
+        }
+      }
+    }
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+}
+
+void TableRegistry::Shutdown(const absl::Status& status) {
+  {
+    absl::MutexLock lock(&sched_mu_);
+    if (stopping_) return;
+    stopping_ = true;
+    sched_cv_.SignalAll();
+  }
+  for (std::thread& w : workers_) w.join();
+  std::vector<std::shared_ptr<Table>> tables;
+  {
+    absl::MutexLock lock(&mu_);
+    shut_down_ = true;
+    for (auto& [id, t] : tables_) tables.push_back(t);
+  }
+  std::vector<std::shared_ptr<Watcher>> pump;
+  for (const std::shared_ptr<Table>& p : tables) {
+    absl::MutexLock lock(&p->mu);
+    const std::shared_ptr<const Frame> last =
+        p->MakeFrame(p->sim != nullptr ? p->tick : p->ClockTick(SteadyClock::now()), false);
+    for (const std::shared_ptr<Watcher>& w : p->watchers) {
+      if (w->Close(status, last)) pump.push_back(w);
+    }
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  absl::MutexLock lock(&sched_mu_);
+  while (!wakes_.empty()) wakes_.pop();
+}
+
+TableStats TableRegistry::stats() const {
+  TableStats s;
+  s.ticks = ticks_.load();
+  s.late_ticks = late_ticks_.load();
+  s.slipped_ticks = slipped_ticks_.load();
+  s.events = events_.load();
+  s.moving = moving_.load();
+  std::vector<std::shared_ptr<Table>> tables;
+  {
+    absl::MutexLock lock(&mu_);
+    s.tables = static_cast<int>(tables_.size());
+    for (const auto& [id, t] : tables_) tables.push_back(t);
+  }
+  for (const std::shared_ptr<Table>& t : tables) {
+    absl::MutexLock lock(&t->mu);
+    s.watchers += static_cast<int>(t->watchers.size());
+  }
+  s.snapshots_sent = counters_->sent.load();
+  s.snapshots_replaced = counters_->replaced.load();
+  s.resyncs = counters_->resyncs.load();
+  return s;
+}
+
+}  // namespace sportsim::server
