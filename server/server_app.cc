@@ -133,8 +133,7 @@ std::string ServerApp::address() const {
 }
 
 void ServerApp::Shutdown(absl::Duration grace) {
-  if (shut_down_ || server_ == nullptr) return;
-  shut_down_ = true;
+  if (server_ == nullptr || shut_down_.exchange(true)) return;
   server_->GetHealthCheckService()->SetServingStatus(false);
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
   server_->Shutdown(absl::ToChronoTime(absl::Now() + grace));

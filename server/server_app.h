@@ -2,6 +2,7 @@
 #ifndef SPORTSIM_SERVER_SERVER_APP_H_
 #define SPORTSIM_SERVER_SERVER_APP_H_
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -60,7 +61,7 @@ class ServerApp {
   std::unique_ptr<grpc::Server> server_;
   std::string host_;
   int port_ = 0;
-  bool shut_down_ = false;
+  std::atomic<bool> shut_down_{false};
 };
 
 }  // namespace sportsim::server

@@ -56,7 +56,7 @@ bool Watcher::Offer(std::shared_ptr<const Frame> frame, const std::vector<EventP
 
 bool Watcher::OfferHeartbeat(std::shared_ptr<const Frame> frame) {
   absl::MutexLock lock(&mu_);
-  if (finished_ || closing_ || pending_ != nullptr || !events_.empty()) return false;
+  if (finished_ || closing_ || pending_ != nullptr) return false;
   pending_ = std::move(frame);
   return !in_flight_;
 }
@@ -137,10 +137,12 @@ void Watcher::Build(v1::TableSnapshot* out) {
   events_.clear();
   out->set_sequence(sequence);
   last_sequence_ = sequence;
-  out->set_resync(resync_);
+  // A resync is announced with the full state; a heartbeat (no balls) leaves it for the next.
+  const bool full_state = frame != nullptr && !frame->heartbeat;
+  out->set_resync(resync_ && full_state);
   out->set_events_lost(lost_);
   out->set_snapshots_replaced(static_cast<uint64_t>(replaced_));
-  resync_ = false;
+  if (full_state) resync_ = false;
   ++sent_;
   counters_->sent.fetch_add(1);
 }
@@ -157,7 +159,8 @@ void Watcher::Pump() {
       finished_ = true;
       action = kFinish;
       status = absl::CancelledError("the watcher went away");
-    } else if (pending_ != nullptr || !events_.empty() || resync_) {
+    } else if (pending_ != nullptr) {
+      // Events alone wait for the next snapshot (they ride along; the rate holds).
       Build(&out_);
       in_flight_ = true;
       if (closing_ && pending_ == nullptr && events_.empty()) {
@@ -259,10 +262,25 @@ struct Table {
   uint64_t evicted_sequence ABSL_GUARDED_BY(mu) = 0;  // highest sequence no longer held
   std::vector<std::shared_ptr<Watcher>> watchers ABSL_GUARDED_BY(mu);
   bool deleted ABSL_GUARDED_BY(mu) = false;
+  bool closed ABSL_GUARDED_BY(mu) = false;  // the server is shutting down
+
+  absl::Status Gone() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    if (closed) return absl::UnavailableError("the server is shutting down");
+    if (deleted) return absl::NotFoundError(absl::StrFormat("table_id: table %s was deleted", id));
+    return absl::OkStatus();
+  }
   uint64_t wake_generation ABSL_GUARDED_BY(mu) = 0;
 
   SteadyClock::time_point Deadline(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     return origin + std::chrono::nanoseconds(std::llround(static_cast<double>(k) * 1e9 / tick_hz));
+  }
+  // The last tick whose deadline has passed.
+  int64_t DueTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
+    int64_t k = std::max<int64_t>(0, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
+    while (Deadline(k + 1) <= now) ++k;
+    while (k > 0 && Deadline(k) > now) --k;
+    return k;
   }
   // The tick the clock is at (never behind the last tick advanced).
   int64_t ClockTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -390,6 +408,7 @@ void TableRegistry::Schedule(Table& t, const std::shared_ptr<Table>& ptr,
                              SteadyClock::time_point when) {
   const uint64_t generation = ++t.wake_generation;
   absl::MutexLock lock(&sched_mu_);
+  if (stopping_) return;
   const bool earliest = wakes_.empty() || when < wakes_.top().when;
   wakes_.push(Wake{when, generation, ptr});
   if (earliest) sched_cv_.Signal();
@@ -401,12 +420,14 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 1000, false); !s.ok()) {
     return s;
   }
-  int n_seats = request.seats() != 0 ? static_cast<int>(request.seats())
-                                     : std::max(2, request.seat_names_size());
-  if (request.seats() > 16 || n_seats > 16) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("seats must be in [1, 16], got %d", n_seats));
+  if (request.seats() > 16 || request.seat_names_size() > 16) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "seats must be in [1, 16], got %d seats and %d seat_names", request.seats(),
+        request.seat_names_size()));
   }
+  const int n_seats = request.seats() != 0        ? static_cast<int>(request.seats())
+                      : request.seat_names_size() ? request.seat_names_size()
+                                                  : 2;
   if (request.seat_names_size() > 0 && request.seat_names_size() != n_seats) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "seat_names: %d names for %d seats", request.seat_names_size(), n_seats));
@@ -597,11 +618,12 @@ absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
 namespace {
 
 // Ends the shot in progress: a summary, the shot_end event, the balls at rest.
-void EndShot(Table& t, int64_t end_tick, const std::string& error, int event_log,
+void EndShot(Table& t, int64_t end_tick, const std::string& error, bool voided, int event_log,
              std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
   if (t.sim == nullptr) return;
-  b::TableState state = t.sim->state();
-  if (!error.empty()) {
+  // A failed engine (non-finite state, event cap) voids the shot: the balls go back.
+  b::TableState state = voided ? t.shot_start : t.sim->state();
+  if (!error.empty() && !voided) {
     // Frozen where the engine stopped: every ball still moving is put at rest.
     for (b::Ball& ball : state.balls) {
       if (ball.state == b::MotionState::kPocketed) continue;
@@ -646,15 +668,21 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
   v1::ResetTableResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
     const int seat = t.SeatOf(request.token());
     if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
     const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
     ++t.sequence;
     std::vector<EventPtr> fresh;
     if (t.sim != nullptr) {
-      EndShot(t, tick, "the table was reset during the shot", limits_.event_log, &fresh);
+      EndShot(t, tick, "the table was reset during the shot", false, limits_.event_log, &fresh);
       moving_.fetch_sub(1);
+      // The tick wake is void; the watchers (if any) get heartbeats again.
+      if (!t.watchers.empty()) {
+        Schedule(t, *found, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
+      } else {
+        ++t.wake_generation;
+      }
     }
     t.rest = t.initial;
     t.tick = tick;
@@ -688,7 +716,7 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
   v1::PlaceBallResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
     const int seat = t.SeatOf(request.token());
     if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
     if (seat != static_cast<int>(t.turn)) {
@@ -759,7 +787,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
   v1::ShootResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
     const int seat = t.SeatOf(request.token());
     if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
     if (seat != static_cast<int>(t.turn)) {
@@ -853,7 +881,7 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
   v1::SetTurnResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
     const int seat = t.SeatOf(request.token());
     if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
     if (seat != static_cast<int>(t.turn)) {
@@ -922,7 +950,7 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
   watcher->Attach(sink);
   {
     absl::MutexLock lock(&t.mu);
-    if (t.deleted) return absl::NotFoundError("table_id: the table was deleted");
+    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
     if (static_cast<int>(t.watchers.size()) >= limits_.max_watchers_per_table) {
       return absl::ResourceExhaustedError(absl::StrFormat(
           "table %s has its maximum of %d watchers (--max_watchers_per_table)", t.id,
@@ -997,7 +1025,7 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
   std::vector<std::shared_ptr<Watcher>> pump;
   {
     absl::MutexLock lock(&t.mu);
-    if (t.deleted || generation != t.wake_generation) return;  // superseded
+    if (t.deleted || t.closed || generation != t.wake_generation) return;  // superseded
     if (t.sim == nullptr) {
       // At rest: a heartbeat for the watchers, then sleep until the next one.
       if (t.watchers.empty()) return;
@@ -1007,8 +1035,7 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
       }
       Schedule(t, ptr, now + absl::ToChronoNanoseconds(limits_.heartbeat));
     } else {
-      const double ns = std::chrono::duration<double, std::nano>(now - t.origin).count();
-      const int64_t due = static_cast<int64_t>(std::floor(ns * t.tick_hz * 1e-9));
+      const int64_t due = t.DueTick(now);
       if (due <= t.tick) {
         Schedule(t, ptr, t.Deadline(t.tick + 1));
       } else {
@@ -1020,23 +1047,37 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
           t.origin += std::chrono::nanoseconds(
               std::llround(static_cast<double>(slip) * 1e9 / t.tick_hz));
           slipped_ticks_.fetch_add(slip);
-          late_ticks_.fetch_add(slip);
           target = t.tick + limits_.max_catchup_ticks;
         }
-        // Late: advanced more than a period after its deadline.
-        const int64_t late = std::min(target, due - 1) - t.tick;
-        if (late > 0) late_ticks_.fetch_add(late);
-        ticks_.fetch_add(target - t.tick);
+        // Tick by tick, so that the tick a shot ends on (or is stopped on) does not depend on
+        // how many ticks one visit covers. For the event engine a tick without events is a
+        // few evaluations; the stepped engine does the same steps either way.
         std::vector<b::Event> events;
         std::string error;
-        absl::Status st = t.sim->AdvanceTo(t.ShotTime(target), &events);
-        if (!st.ok()) {
-          error = std::string(st.message());
-        } else if (t.ShotTime(target) > limits_.max_shot_s && !t.sim->AtRest()) {
-          error = absl::StrFormat("the shot was stopped after %g s of simulated time",
-                                  limits_.max_shot_s);
+        bool voided = false;
+        bool ended = false;
+        int64_t k = t.tick;
+        while (k < target && !ended) {
+          ++k;
+          const absl::Status st = t.sim->AdvanceTo(t.ShotTime(k), &events);
+          if (!st.ok()) {
+            error = absl::StrFormat("%s; the balls were put back where the shot started",
+                                    st.message());
+            voided = ended = true;
+          } else if (t.sim->AtRest()) {
+            ended = true;
+          } else if (t.ShotTime(k) >= limits_.max_shot_s) {
+            error = absl::StrFormat("the shot was stopped after %g s of simulated time",
+                                    limits_.max_shot_s);
+            ended = true;
+          }
         }
-        t.tick = target;
+        // Late: advanced more than a period after its deadline.
+        const int64_t late = std::min(k, due - 1) - t.tick;
+        if (late > 0) late_ticks_.fetch_add(late);
+        ticks_.fetch_add(k - t.tick);
+        t.tick = k;
+        target = k;
         ++t.sequence;
         std::vector<EventPtr> fresh;
         const double start_t = t.TableTime(t.current.start_tick());
@@ -1048,9 +1089,8 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
           pe.set_shot_id(t.current.shot_id());
           fresh.push_back(t.Log(std::move(pe), limits_.event_log));
         }
-        const bool ended = !error.empty() || t.sim->AtRest();
         if (ended) {
-          EndShot(t, target, error, limits_.event_log, &fresh);
+          EndShot(t, target, error, voided, limits_.event_log, &fresh);
           moving_.fetch_sub(1);
         }
         events_.fetch_add(static_cast<int64_t>(fresh.size()));
@@ -1072,22 +1112,24 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
 }
 
 void TableRegistry::Shutdown(const absl::Status& status) {
+  // No new call gets a table from here on; calls that already hold one see it closed below.
+  std::vector<std::shared_ptr<Table>> tables;
+  {
+    absl::MutexLock lock(&mu_);
+    if (shut_down_) return;
+    shut_down_ = true;
+    for (auto& [id, t] : tables_) tables.push_back(t);
+  }
   {
     absl::MutexLock lock(&sched_mu_);
-    if (stopping_) return;
     stopping_ = true;
     sched_cv_.SignalAll();
   }
   for (std::thread& w : workers_) w.join();
-  std::vector<std::shared_ptr<Table>> tables;
-  {
-    absl::MutexLock lock(&mu_);
-    shut_down_ = true;
-    for (auto& [id, t] : tables_) tables.push_back(t);
-  }
   std::vector<std::shared_ptr<Watcher>> pump;
   for (const std::shared_ptr<Table>& p : tables) {
     absl::MutexLock lock(&p->mu);
+    p->closed = true;
     const std::shared_ptr<const Frame> last =
         p->MakeFrame(p->sim != nullptr ? p->tick : p->ClockTick(SteadyClock::now()), false);
     for (const std::shared_ptr<Watcher>& w : p->watchers) {

@@ -1,6 +1,6 @@
 // Authoritative billiards tables: the registry, the fixed-rate scheduler and the snapshot
 // fan-out to watchers. No gRPC here: a watcher writes through a SnapshotSink (the gRPC reactor in
-// table_service.cc, a fake in tests). docs/server.md describes the design.
+// services.cc, a fake in tests). docs/server.md describes the design.
 //
 // Time. Tick k of a table is due at origin + k / tick_hz on the monotonic clock. A shot struck
 // at tick s is simulated in its own time from 0, and tick k advances it to (k - s) / tick_hz
@@ -51,7 +51,8 @@ struct TableLimits {
 struct TableStats {
   int64_t ticks = 0;           ///< table ticks advanced
   int64_t late_ticks = 0;      ///< advanced more than one period after their deadline
-  int64_t slipped_ticks = 0;   ///< skipped by the catch-up cap (the table's clock slipped)
+  int64_t slipped_ticks = 0;   ///< never advanced on time: the catch-up cap moved the table's
+                               ///< clock on instead (not counted in ticks or late_ticks)
   int64_t snapshots_sent = 0;
   int64_t snapshots_replaced = 0;  ///< latest wins: offered but overtaken before being sent
   int64_t resyncs = 0;
@@ -194,6 +195,7 @@ class TableRegistry {
   };
 
   absl::StatusOr<std::shared_ptr<Table>> Find(const std::string& id);
+  /// Wakes a worker for `t` at `when`, superseding its previous wake. Call with t.mu held.
   void Schedule(Table& t, const std::shared_ptr<Table>& ptr, SteadyClock::time_point when)
       ABSL_LOCKS_EXCLUDED(sched_mu_);
   void WorkerLoop();

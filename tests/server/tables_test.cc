@@ -453,6 +453,9 @@ TEST_F(TablesTest, WatcherSeesEveryEventAndTheFinalStateWhileAStalledOneStaysBou
   bool resync = false;
   uint64_t last_seq = 0;
   for (const v1::TableSnapshot& s : got) {
+    // Every snapshot is a full one (events never travel alone, so the rate holds).
+    EXPECT_EQ(s.balls_size(), 10);
+    EXPECT_GE(s.tick(), got.front().tick());
     resync |= s.resync();
     EXPECT_GE(s.sequence(), last_seq);
     last_seq = s.sequence();
@@ -656,9 +659,14 @@ TEST_F(TablesTest, TheSameShotGivesTheSameBitsOnManyTablesAtOnce) {
     ASSERT_TRUE(reg_.Shoot(Shot(t, 0, Break(4.0))).ok());
   }
   std::string first;
+  int64_t ticks = -1;
   for (const v1::CreateTableResponse& t : tables) {
     absl::StatusOr<v1::TableInfo> info = WaitAtRest(reg_, t.table_id());
     ASSERT_TRUE(info.ok());
+    // The shot ends on the same tick of its own, however the workers got to the table.
+    const int64_t took = info->last_shot().end_tick() - info->last_shot().start_tick();
+    if (ticks < 0) ticks = took;
+    EXPECT_EQ(took, ticks);
     std::string bits;
     for (const v1::BallState& ball : info->balls()) bits += ball.SerializeAsString();
     if (first.empty()) first = bits;
@@ -667,6 +675,31 @@ TEST_F(TablesTest, TheSameShotGivesTheSameBitsOnManyTablesAtOnce) {
   const TableStats s = reg_.stats();
   EXPECT_GT(s.ticks, 0);
   EXPECT_EQ(s.moving, 0);
+}
+
+TEST_F(TablesTest, SeatNamesAloneSetTheSeats) {
+  v1::CreateTableRequest r = QuickTable();
+  r.add_seat_names("alice");
+  const v1::CreateTableResponse t = Create(r);
+  ASSERT_EQ(t.seats_size(), 1);
+  EXPECT_EQ(t.seats(0).name(), "alice");
+}
+
+TEST_F(TablesTest, AnEngineFailureVoidsTheShot) {
+  // An event cap of 20 stops the break early: the shot ends with the error, the balls go back.
+  v1::CreateTableRequest r = QuickTable();
+  r.mutable_solver()->set_max_events(20);
+  const v1::CreateTableResponse t = Create(r);
+  v1::GetTableRequest get;
+  get.set_table_id(t.table_id());
+  const v1::TableInfo before = *reg_.Get(get);
+  ASSERT_TRUE(reg_.Shoot(Shot(t, 0, Break(3.0))).ok());
+  absl::StatusOr<v1::TableInfo> after = WaitAtRest(reg_, t.table_id());
+  ASSERT_TRUE(after.ok());
+  EXPECT_THAT(after->last_shot().error(), HasSubstr("put back"));
+  ExpectSameBalls(after->balls(), before.balls());
+  // The table plays on.
+  EXPECT_TRUE(reg_.Shoot(Shot(t, 0, Break(0.2))).ok());
 }
 
 TEST(ShotRefereeTest, FirstHitRailsAfterContactAndPockets) {
