@@ -260,6 +260,109 @@ class CliAgainstServer(unittest.TestCase):
         self.assertRegex(r.stderr, r"^sportsim: (UNAVAILABLE|DEADLINE_EXCEEDED): ")
 
 
+# A quick table: a 9-ball rack on heavy cloth, so a 3 m/s break is over in about a second.
+QUICK_TABLE = ("--table", "pool-9ft", "--rack", "9ball", "--param", "mu_roll=0.3",
+               "--param", "spin_decel_rps2=100")
+QUICK_BREAK = ("--ball-speed", "3", "--phi", "0.4", "--a", "0.1")
+
+
+class TablesAgainstServer(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.server = ServerProcess(SERVER)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.__exit__()
+
+    def cli_json(self, *args):
+        r = cli(self.server.address, "--format", "json", *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return json.loads(r.stdout)
+
+    def test_create_shoot_watch_until_rest_matches_shot_simulate(self):
+        created = self.cli_json("table", "create", *QUICK_TABLE, "--tick-hz", "240")
+        self.assertEqual(set(created) >= {"table_id", "seats"}, True, created)
+        self.assertEqual([s["seat"] for s in created["seats"]], [0, 1])
+        table, token = created["table_id"], created["seats"][0]["token"]
+        shot = self.cli_json("table", "shoot", table, "--token", token, *QUICK_BREAK,
+                             "--next-seat", "1")
+        self.assertEqual(shot["shot_id"], 1)
+        self.assertIsInstance(shot["start_tick"], int)
+        # From just before the shot, so nothing is missed however late the watch starts.
+        r = subprocess.run([CLI, "--server", self.server.address, "--format", "jsonl", "table",
+                            "watch", table, "--rate", "60", "--until-rest", "--from-sequence",
+                            "0"], capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        lines = [json.loads(line) for line in r.stdout.splitlines()]
+        self.assertGreater(len(lines), 5)
+        for snap in lines:
+            for key in ("sequence", "tick", "t_s", "balls", "events", "at_rest"):
+                self.assertIn(key, snap)
+            self.assertIsInstance(snap["tick"], int)
+        last = lines[-1]
+        self.assertTrue(last["at_rest"])
+        kinds = [e["kind"] for snap in lines for e in snap["events"]]
+        self.assertEqual(kinds.count("shot"), 1)
+        self.assertEqual(kinds.count("shot_end"), 1)
+        self.assertIn("ball_ball", kinds)
+        end = [e for snap in lines for e in snap["events"] if e["kind"] == "shot_end"][0]
+        self.assertEqual(end["summary"]["first_ball_hit"], "1")
+        # The same shot fast-forwarded: the same final state, to the bit (JSON numbers are
+        # shortest round-trip text, so equal text is equal doubles).
+        sim = self.cli_json("shot", "simulate", *QUICK_TABLE, *QUICK_BREAK)
+        want = {b["id"]: (b["x_m"], b["y_m"], b["state"]) for b in sim["balls"]}
+        got = {b["id"]: (b["x_m"], b["y_m"], b["state"]) for b in last["balls"]}
+        self.assertEqual(got, want)
+        sim_kinds = [e["kind"] for e in sim["events"]]
+        self.assertEqual([k for k in kinds if k in EVENT_KINDS], sim_kinds)
+        # Seat 1 plays next; seat 0 is refused with PERMISSION_DENIED (exit 7).
+        r = cli(self.server.address, "table", "shoot", table, "--token", token, *QUICK_BREAK)
+        self.assertEqual(r.returncode, 7, r.stderr)
+        self.assertIn("PERMISSION_DENIED", r.stderr)
+        info = self.cli_json("table", "get", table)
+        self.assertEqual(info["turn"], 1)
+        self.assertEqual(info["last_shot"]["shot_id"], 1)
+
+    def test_list_place_reset_delete(self):
+        created = self.cli_json("table", "create", *QUICK_TABLE, "--seats", "3")
+        table, token = created["table_id"], created["seats"][0]["token"]
+        listed = self.cli_json("table", "list")
+        self.assertIn(table, [t["table_id"] for t in listed["tables"]])
+        self.cli_json("table", "place", table, "--token", token, "--ball", "cue@-0.7,0.2")
+        info = self.cli_json("table", "get", table)
+        cue = [b for b in info["balls"] if b["id"] == "cue"][0]
+        self.assertEqual((cue["x_m"], cue["y_m"]), (-0.7, 0.2))
+        r = cli(self.server.address, "table", "place", table, "--token", token, "--ball",
+                "cue@nan,0")
+        self.assertNotEqual(r.returncode, 0)
+        self.cli_json("table", "reset", table, "--token", token)
+        info = self.cli_json("table", "get", table)
+        cue = [b for b in info["balls"] if b["id"] == "cue"][0]
+        self.assertNotEqual((cue["x_m"], cue["y_m"]), (-0.7, 0.2))
+        r = cli(self.server.address, "table", "delete", table, "--token", "wrong")
+        self.assertEqual(r.returncode, 7, r.stderr)
+        self.cli_json("table", "delete", table, "--token", created["seats"][2]["token"])
+        r = cli(self.server.address, "table", "get", table)
+        self.assertEqual(r.returncode, 5, r.stderr)
+        self.assertIn("NOT_FOUND", r.stderr)
+
+    def test_watch_text_and_svg(self):
+        created = self.cli_json("table", "create", *QUICK_TABLE, "--tick-hz", "240")
+        table, token = created["table_id"], created["seats"][0]["token"]
+        self.cli_json("table", "shoot", table, "--token", token, *QUICK_BREAK)
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "watch.svg")
+            r = subprocess.run([CLI, "--server", self.server.address, "table", "watch", table,
+                                "--until-rest", "--from-sequence", "0", "--svg", path],
+                               capture_output=True, text=True, timeout=60)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("shot 1 by seat 0 (cue): first hit 1", r.stdout)
+            root = ET.parse(path).getroot()
+            self.assertEqual(root.tag, SVG_NS + "svg")
+            self.assertGreaterEqual(len(root.findall(".//" + SVG_NS + "polyline")), 2)
+
+
 class ServerLifecycle(unittest.TestCase):
     def test_bad_listen_is_one_clear_line(self):
         for bad in ("nonsense", "127.0.0.1:99999", "[::1"):
@@ -290,6 +393,31 @@ class ServerLifecycle(unittest.TestCase):
                 self.assertEqual(code, 0)
                 self.assertLess(seconds, 5)
                 self.assertIn("stopped", out)
+
+
+    def test_sigterm_while_tables_move_and_watchers_stream(self):
+        with ServerProcess(SERVER) as server:
+            created = json.loads(cli(server.address, "--format", "json", "table", "create",
+                                     "--table", "pool-9ft", "--rack", "9ball").stdout)
+            table, token = created["table_id"], created["seats"][0]["token"]
+            self.assertEqual(cli(server.address, "table", "shoot", table, "--token", token,
+                                 "--ball-speed", "6").returncode, 0)
+            watchers = [subprocess.Popen([CLI, "--server", server.address, "--format", "jsonl",
+                                          "table", "watch", table, "--rate", "30"],
+                                         stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                         text=True) for _ in range(3)]
+            for w in watchers:  # each has its first snapshot: the streams are live
+                self.assertTrue(w.stdout.readline().startswith("{"))
+            code, seconds, _ = server.terminate(signal.SIGTERM)
+            self.assertEqual(code, 0)
+            self.assertLess(seconds, 5)
+            for w in watchers:
+                out, err = w.communicate(timeout=10)
+                self.assertEqual(w.returncode, 14, err)  # UNAVAILABLE
+                self.assertIn("UNAVAILABLE", err)
+                last = json.loads(out.splitlines()[-1])
+                self.assertFalse(last["at_rest"])  # the last snapshot, mid-shot
+                self.assertEqual(len(last["balls"]), 10)
 
 
 if __name__ == "__main__":
