@@ -4,6 +4,7 @@
 #include <cmath>
 #include <deque>
 #include <random>
+#include <time.h>
 #include <utility>
 
 #include "absl/strings/str_format.h"
@@ -17,6 +18,38 @@
 namespace sportsim::server {
 
 namespace b = ::sportsim::billiards;
+
+// ---------------------------------------------------------------------------------------------
+// LatencyHistogram
+
+void LatencyHistogram::Add(std::chrono::nanoseconds d) {
+  const double us = std::max(1.0, static_cast<double>(d.count()) * 1e-3);
+  const int i = std::clamp(static_cast<int>(4.0 * std::log2(us)), 0, kBuckets - 1);
+  counts_[i].fetch_add(1, std::memory_order_relaxed);
+}
+
+std::vector<int64_t> LatencyHistogram::Counts() const {
+  std::vector<int64_t> out(kBuckets);
+  for (int i = 0; i < kBuckets; ++i) out[i] = counts_[i].load(std::memory_order_relaxed);
+  return out;
+}
+
+double LatencyHistogram::Quantile(double q, const std::vector<int64_t>& since) const {
+  std::vector<int64_t> c = Counts();
+  int64_t total = 0;
+  for (int i = 0; i < kBuckets; ++i) {
+    if (!since.empty()) c[i] -= since[i];
+    total += c[i];
+  }
+  if (total == 0) return 0.0;
+  const double want = q * static_cast<double>(total);
+  int64_t seen = 0;
+  for (int i = 0; i < kBuckets; ++i) {
+    seen += c[i];
+    if (static_cast<double>(seen) >= want) return std::exp2((i + 1) / 4.0) * 1e-6;
+  }
+  return std::exp2(kBuckets / 4.0) * 1e-6;
+}
 
 // ---------------------------------------------------------------------------------------------
 // Watcher
@@ -115,6 +148,8 @@ void Watcher::Build(v1::TableSnapshot* out) {
     out->set_shot_id(frame->shot_id);
     out->set_heartbeat(frame->heartbeat);
     if (!frame->heartbeat) {
+      counters_->publish_to_write.Add(std::chrono::duration_cast<std::chrono::nanoseconds>(
+          SteadyClock::now() - frame->published));
       const bool all = !options_.changed_only || resync_ || last_sent_ == nullptr ||
                        last_sent_->balls.size() != frame->balls.size();
       for (size_t i = 0; i < frame->balls.size(); ++i) {
@@ -309,6 +344,7 @@ struct Table {
     f->shot_id = current.shot_id();
     f->model = model;
     if (!heartbeat) f->balls = Balls().balls;
+    f->published = SteadyClock::now();
     return f;
   }
   // Seat of a token, or -1. Compares every seat in full (no early exit on the first byte).
@@ -1015,7 +1051,12 @@ void TableRegistry::WorkerLoop() {
       // Another worker may be waiting for the next one.
       if (!wakes_.empty()) sched_cv_.Signal();
     }
+    timespec c0{}, c1{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
     Process(wake.table, wake.generation, SteadyClock::now());
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+    tick_cpu_ns_.fetch_add((c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec),
+                           std::memory_order_relaxed);
   }
 }
 
@@ -1147,6 +1188,7 @@ TableStats TableRegistry::stats() const {
   s.late_ticks = late_ticks_.load();
   s.slipped_ticks = slipped_ticks_.load();
   s.events = events_.load();
+  s.tick_cpu_ns = tick_cpu_ns_.load();
   s.moving = moving_.load();
   std::vector<std::shared_ptr<Table>> tables;
   {

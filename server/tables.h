@@ -13,6 +13,7 @@
 #ifndef SPORTSIM_SERVER_TABLES_H_
 #define SPORTSIM_SERVER_TABLES_H_
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -57,6 +58,7 @@ struct TableStats {
   int64_t snapshots_replaced = 0;  ///< latest wins: offered but overtaken before being sent
   int64_t resyncs = 0;
   int64_t events = 0;          ///< table events produced
+  int64_t tick_cpu_ns = 0;     ///< thread CPU time the workers spent on tables
   int tables = 0;
   int moving = 0;
   int watchers = 0;
@@ -73,6 +75,7 @@ struct Frame {
   uint64_t shot_id = 0;
   std::shared_ptr<const billiards::TableModel> model;
   std::vector<billiards::Ball> balls;
+  SteadyClock::time_point published;  ///< when the tick made it (publish-to-write latency)
 };
 
 using EventPtr = std::shared_ptr<const v1::TableEvent>;
@@ -94,9 +97,25 @@ struct WatchOptions {
   int backlog = 1024;
 };
 
+/// A lock-free histogram of durations: bucket i holds [2^(i/4), 2^((i+1)/4)) microseconds
+/// (about 19 % wide), from 1 us to 2^32 us.
+class LatencyHistogram {
+ public:
+  static constexpr int kBuckets = 128;
+  void Add(std::chrono::nanoseconds d);
+  /// The upper edge of the bucket holding quantile q of what was added (seconds); 0 if empty.
+  /// `since` subtracts an earlier copy, for a window.
+  double Quantile(double q, const std::vector<int64_t>& since = {}) const;
+  std::vector<int64_t> Counts() const;
+
+ private:
+  std::array<std::atomic<int64_t>, kBuckets> counts_{};
+};
+
 /// Totals over every watcher of a registry.
 struct WatchCounters {
   std::atomic<int64_t> sent{0}, replaced{0}, resyncs{0};
+  LatencyHistogram publish_to_write;  ///< from the tick's frame to the start of its write
 };
 
 /// One reader of a table: the newest unsent frame (latest wins) and every unsent event. Thread
@@ -185,6 +204,7 @@ class TableRegistry {
   void Shutdown(const absl::Status& status);
 
   TableStats stats() const;
+  const LatencyHistogram& publish_to_write() const { return counters_->publish_to_write; }
 
  private:
   struct Wake {
@@ -214,7 +234,7 @@ class TableRegistry {
   bool stopping_ ABSL_GUARDED_BY(sched_mu_) = false;
   std::vector<std::thread> workers_;
 
-  std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0};
+  std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0}, tick_cpu_ns_{0};
   std::atomic<int> moving_{0};
 };
 
