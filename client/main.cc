@@ -121,8 +121,10 @@ void Int64FieldNames(const google::protobuf::Descriptor* d, std::set<std::string
 
 // Protobuf's JSON mapping quotes 64-bit integers ("tick": "120"); the command-line contract
 // wants numbers, exact in every JSON reader up to 2^53 (a tick count at 1 kHz passes that after
-// 285,000 years). Only fields declared 64-bit in the message are unquoted, and only where the
-// quoted text is all digits.
+// 285,000 years). A key is unquoted when a field of that name is 64-bit somewhere in the
+// message's type tree and its value is a quoted integer. A string field sharing the name of a
+// 64-bit field elsewhere would be unquoted too when it holds only digits; no sportsim message
+// has such a pair today (keep it so when adding fields).
 std::string Int64AsNumbers(const google::protobuf::Descriptor* d, const std::string& json) {
   std::set<std::string> names;
   std::set<const google::protobuf::Descriptor*> seen;

@@ -29,7 +29,8 @@ ABSL_FLAG(double, tick_hz, 0.0, "table create: ticks per second (default 120)");
 ABSL_FLAG(std::string, token, "", "The seat's token (table create printed it)");
 ABSL_FLAG(std::optional<int>, next_seat, std::nullopt, "table shoot: pass the turn to this seat");
 ABSL_FLAG(std::optional<int>, seat, std::nullopt, "table turn: the seat to play next");
-ABSL_FLAG(double, rate, 30.0, "table watch: snapshots per second at most (0: every tick)");
+ABSL_FLAG(double, rate, 30.0,
+          "table watch: snapshots per second at most (0, or above the tick rate: every tick)");
 ABSL_FLAG(bool, until_rest, false,
           "table watch: exit after the first at-rest snapshot that follows a shot");
 ABSL_FLAG(std::vector<std::string>, fields, {},
@@ -46,15 +47,10 @@ namespace {
 
 using Stub = v1::Billiards::Stub;
 
+// csv is refused before any call (RunTable), so these print json, jsonl or text.
 template <typename Response>
 int Print(const Context& ctx, const Response& r, const std::function<void()>& text) {
-  switch (ctx.format) {
-    case Format::kJson: std::cout << ToJson(r, false) << "\n"; return 0;
-    case Format::kJsonl: std::cout << ToJson(r, true) << "\n"; return 0;
-    case Format::kCsv: return UsageError("this command has no csv form");
-    case Format::kText: text(); return 0;
-  }
-  return 0;
+  return PrintResponse(ctx, r, [](const Response&) {}, [&](const Response&) { text(); });
 }
 
 std::string BallLine(const v1::BallState& b) {
@@ -311,11 +307,14 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   v1::TableSnapshot s;
   WatchText text;
   bool saw_shot_end = false;
+  bool saw_moving = false;
   bool done = false;
   int64_t snapshots = 0;
   while (!done && reader->Read(&s)) {
     ++snapshots;
     for (const v1::TableEvent& e : s.events()) saw_shot_end |= e.kind() == v1::shot_end;
+    // A reader resynced after falling behind may have lost the shot_end event itself.
+    saw_moving |= !s.at_rest() || s.resync();
     switch (ctx.format) {
       case Format::kJson:
       case Format::kJsonl: std::cout << ToJson(s, true) << std::endl; break;
@@ -343,7 +342,7 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
       }
       for (const v1::TableEvent& e : s.events()) drawing.events.push_back(e);
     }
-    if (until_rest && saw_shot_end && s.at_rest()) done = true;
+    if (until_rest && (saw_shot_end || saw_moving) && s.at_rest() && !s.heartbeat()) done = true;
   }
   grpc::Status status;
   if (done) {
@@ -368,6 +367,9 @@ int RunTable(const Context& ctx, const std::vector<std::string>& args) {
   static constexpr const char* kVerbs =
       "create, list, get, delete, reset, place, shoot, turn, watch";
   if (args.empty()) return UsageError(std::string("table needs a subcommand: ") + kVerbs);
+  if (ctx.format == Format::kCsv && args[0] != "watch") {
+    return UsageError("table " + args[0] + " has no csv form (json, jsonl or text)");
+  }
   const std::vector<std::string> rest(args.begin() + 1, args.end());
   std::unique_ptr<Stub> stub = v1::Billiards::NewStub(ctx.channel);
   const std::string& verb = args[0];

@@ -21,7 +21,7 @@ namespace sportsim::server {
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  ///< host:port ([v6]:port); port 0 = any free port
-  int max_receive_message_bytes = 1 << 20;  ///< requests are small: 1 MiB
+  int max_receive_message_bytes = 64 << 10;  ///< requests are small: 64 KiB (--max_request_bytes)
   int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
   TableLimits tables;
 };

@@ -36,11 +36,15 @@ std::vector<int64_t> LatencyHistogram::Counts() const {
 
 double LatencyHistogram::Quantile(double q, const std::vector<int64_t>& since) const {
   std::vector<int64_t> c = Counts();
-  int64_t total = 0;
-  for (int i = 0; i < kBuckets; ++i) {
-    if (!since.empty()) c[i] -= since[i];
-    total += c[i];
+  if (!since.empty()) {
+    for (int i = 0; i < kBuckets; ++i) c[i] -= since[i];
   }
+  return QuantileOf(c, q);
+}
+
+double LatencyHistogram::QuantileOf(const std::vector<int64_t>& c, double q) {
+  int64_t total = 0;
+  for (int64_t n : c) total += n;
   if (total == 0) return 0.0;
   const double want = q * static_cast<double>(total);
   int64_t seen = 0;
@@ -322,6 +326,10 @@ struct Table {
     const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
     return std::max(tick, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
   }
+  // The tick now: the last one advanced while a shot moves, else the clock's.
+  int64_t NowTick() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    return sim != nullptr ? tick : ClockTick(SteadyClock::now());
+  }
   double TableTime(int64_t k) const { return static_cast<double>(k) * period_s; }
   // The shot's own time at tick k.
   double ShotTime(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -332,7 +340,9 @@ struct Table {
   const b::TableState& Balls() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     return sim != nullptr ? sim->state() : rest;
   }
-  std::shared_ptr<const Frame> MakeFrame(int64_t k, bool heartbeat)
+  // `ticked`: made by a tick, whose latency counts from the tick's deadline (a late tick counts
+  // as late); frames made by calls count from now.
+  std::shared_ptr<const Frame> MakeFrame(int64_t k, bool heartbeat, bool ticked = false)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     auto f = std::make_shared<Frame>();
     f->sequence = sequence;
@@ -344,7 +354,7 @@ struct Table {
     f->shot_id = current.shot_id();
     f->model = model;
     if (!heartbeat) f->balls = Balls().balls;
-    f->published = SteadyClock::now();
+    f->published = ticked ? Deadline(k) : SteadyClock::now();
     return f;
   }
   // Seat of a token, or -1. Compares every seat in full (no early exit on the first byte).
@@ -360,6 +370,27 @@ struct Table {
       if (diff == 0) seat = static_cast<int>(i);
     }
     return seat;
+  }
+  // The shot's physics events, in table time, logged; the referee sees each.
+  void LogShotEvents(const std::vector<b::Event>& events, int event_log,
+                     std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    const double start_t = TableTime(current.start_tick());
+    for (const b::Event& be : events) {
+      referee->Observe(be);
+      v1::TableEvent pe;
+      EventToProto(*model, shot_start, be, &pe);
+      pe.set_t_s(start_t + be.t_s);
+      pe.set_shot_id(current.shot_id());
+      fresh->push_back(Log(std::move(pe), event_log));
+    }
+  }
+  // Offers a frame (or none: the events wait) and the events to every watcher; returns those
+  // to pump once the lock is released.
+  void OfferAll(const std::shared_ptr<const Frame>& frame, const std::vector<EventPtr>& fresh,
+                std::vector<std::shared_ptr<Watcher>>* pump) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    for (const std::shared_ptr<Watcher>& w : watchers) {
+      if (w->Offer(frame, fresh)) pump->push_back(w);
+    }
   }
   EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     e.set_sequence(sequence);
@@ -537,7 +568,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   tables_[table->id] = table;
   response.set_table_id(table->id);
   response.set_tick_hz(tick_hz);
-  response.set_engine(solver->engine == b::Engine::kEvent ? "event" : "stepped");
+  response.set_engine(std::string(b::EngineName(solver->engine)));
   if (solver->engine == b::Engine::kStepped) response.set_dt_s(solver->dt_s);
   response.set_tick(0);
   return response;
@@ -553,7 +584,7 @@ absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& requ
   info.set_preset(t.preset);
   info.set_rack(t.rack);
   info.set_tick_hz(t.tick_hz);
-  const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+  const int64_t tick = t.NowTick();
   info.set_tick(tick);
   info.set_t_s(t.TableTime(tick));
   info.set_sequence(t.sequence);
@@ -566,9 +597,9 @@ absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& requ
   }
   for (const b::Ball& ball : t.Balls().balls) BallToProto(*t.model, ball, info.add_balls());
   info.set_shots(t.shots);
-  *info.mutable_last_shot() = t.last_shot;
+  if (t.shots > 0) *info.mutable_last_shot() = t.last_shot;
   info.set_watchers(static_cast<uint32_t>(t.watchers.size()));
-  info.set_engine(t.solver.engine == b::Engine::kEvent ? "event" : "stepped");
+  info.set_engine(std::string(b::EngineName(t.solver.engine)));
   if (t.solver.engine == b::Engine::kStepped) info.set_dt_s(t.solver.dt_s);
   if (request.include_geometry()) GeometryToProto(*t.model, info.mutable_geometry());
   return info;
@@ -638,7 +669,7 @@ absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
     table->deleted = true;
     if (table->sim != nullptr) moving_.fetch_sub(1);
     const std::shared_ptr<const Frame> last =
-        table->MakeFrame(table->sim != nullptr ? table->tick : table->ClockTick(SteadyClock::now()),
+        table->MakeFrame(table->NowTick(),
                          false);
     const absl::Status gone =
         absl::NotFoundError(absl::StrFormat("table %s was deleted", table->id));
@@ -707,7 +738,7 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
     if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
     const int seat = t.SeatOf(request.token());
     if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
-    const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+    const int64_t tick = t.NowTick();
     ++t.sequence;
     std::vector<EventPtr> fresh;
     if (t.sim != nullptr) {
@@ -727,9 +758,7 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
     fresh.push_back(t.Log(std::move(e), limits_.event_log));
     events_.fetch_add(static_cast<int64_t>(fresh.size()));
     const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
-    for (const std::shared_ptr<Watcher>& w : t.watchers) {
-      if (w->Offer(frame, fresh)) pump.push_back(w);
-    }
+    t.OfferAll(frame, fresh, &pump);
     response.set_sequence(t.sequence);
     response.set_tick(tick);
   }
@@ -800,9 +829,7 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
     std::vector<EventPtr> fresh{t.Log(std::move(e), limits_.event_log)};
     events_.fetch_add(1);
     const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
-    for (const std::shared_ptr<Watcher>& w : t.watchers) {
-      if (w->Offer(frame, fresh)) pump.push_back(w);
-    }
+    t.OfferAll(frame, fresh, &pump);
     response.set_sequence(t.sequence);
     response.set_tick(tick);
   }
@@ -880,14 +907,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     e.set_seat(static_cast<uint32_t>(seat));
     e.add_balls(id);
     fresh.push_back(t.Log(std::move(e), limits_.event_log));
-    for (const b::Event& be : events) {
-      t.referee->Observe(be);
-      v1::TableEvent pe;
-      EventToProto(*t.model, t.shot_start, be, &pe);
-      pe.set_t_s(t.TableTime(start) + be.t_s);
-      pe.set_shot_id(shot_id);
-      fresh.push_back(t.Log(std::move(pe), limits_.event_log));
-    }
+    t.LogShotEvents(events, limits_.event_log, &fresh);
     if (request.has_next_seat() && request.next_seat() != t.turn) {
       t.turn = request.next_seat();
       v1::TableEvent te = TableEvent(v1::turn, t.TableTime(start), shot_id);
@@ -896,9 +916,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     }
     events_.fetch_add(static_cast<int64_t>(fresh.size()));
     const std::shared_ptr<const Frame> frame = t.MakeFrame(start, false);
-    for (const std::shared_ptr<Watcher>& w : t.watchers) {
-      if (w->Offer(frame, fresh)) pump.push_back(w);
-    }
+    t.OfferAll(frame, fresh, &pump);
     response.set_shot_id(shot_id);
     response.set_start_tick(start);
     StrikeReportToProto(*outcome, response.mutable_strike());
@@ -930,7 +948,7 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
                                                         t.seats.size() - 1, request.seat()));
     }
     if (request.seat() != t.turn) {
-      const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+      const int64_t tick = t.NowTick();
       ++t.sequence;
       t.turn = request.seat();
       v1::TableEvent e = TableEvent(v1::turn, t.TableTime(tick), t.current.shot_id());
@@ -940,9 +958,7 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
       // At rest the turn goes out now; while balls move it rides with the next snapshot.
       const std::shared_ptr<const Frame> frame =
           t.sim == nullptr ? t.MakeFrame(tick, false) : nullptr;
-      for (const std::shared_ptr<Watcher>& w : t.watchers) {
-        if (w->Offer(frame, fresh)) pump.push_back(w);
-      }
+      t.OfferAll(frame, fresh, &pump);
     }
     response.set_sequence(t.sequence);
   }
@@ -960,13 +976,12 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
   options.changed_only = request.changed_only();
   options.backlog = limits_.watcher_backlog;
   if (request.rate_hz() != 0) {
-    if (absl::Status s = CheckFiniteInRange("rate_hz", request.rate_hz(), 0, true, t.tick_hz,
-                                            false);
+    if (absl::Status s = CheckFiniteInRange("rate_hz", request.rate_hz(), 0, true, 1000, false);
         !s.ok()) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("%s (the table's tick rate is the most; 0 means it)", s.message()));
+      return s;
     }
-    options.interval_ticks = t.tick_hz / request.rate_hz();
+    // Above the table's tick rate is every tick.
+    options.interval_ticks = std::max(1.0, t.tick_hz / request.rate_hz());
   }
   if (request.fields_size() > 0) {
     options.position = options.velocity = options.spin = options.orientation = false;
@@ -1004,7 +1019,7 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
         if (e->sequence() > request.from_sequence()) replay.push_back(e);
       }
     }
-    const int64_t tick = t.sim != nullptr ? t.tick : t.ClockTick(SteadyClock::now());
+    const int64_t tick = t.NowTick();
     watcher->Due(tick);  // the first snapshot is now
     watcher->Offer(t.MakeFrame(tick, false), replay);
     t.watchers.push_back(watcher);
@@ -1121,15 +1136,7 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
         target = k;
         ++t.sequence;
         std::vector<EventPtr> fresh;
-        const double start_t = t.TableTime(t.current.start_tick());
-        for (const b::Event& be : events) {
-          t.referee->Observe(be);
-          v1::TableEvent pe;
-          EventToProto(*t.model, t.shot_start, be, &pe);
-          pe.set_t_s(start_t + be.t_s);
-          pe.set_shot_id(t.current.shot_id());
-          fresh.push_back(t.Log(std::move(pe), limits_.event_log));
-        }
+        t.LogShotEvents(events, limits_.event_log, &fresh);
         if (ended) {
           EndShot(t, target, error, voided, limits_.event_log, &fresh);
           moving_.fetch_sub(1);
@@ -1138,7 +1145,7 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
         std::shared_ptr<const Frame> frame;
         for (const std::shared_ptr<Watcher>& w : t.watchers) {
           const bool due_now = w->Due(target) || ended;
-          if (due_now && frame == nullptr) frame = t.MakeFrame(target, false);
+          if (due_now && frame == nullptr) frame = t.MakeFrame(target, false, true);
           if (w->Offer(due_now ? frame : nullptr, fresh)) pump.push_back(w);
         }
         if (!ended) {
@@ -1172,7 +1179,7 @@ void TableRegistry::Shutdown(const absl::Status& status) {
     absl::MutexLock lock(&p->mu);
     p->closed = true;
     const std::shared_ptr<const Frame> last =
-        p->MakeFrame(p->sim != nullptr ? p->tick : p->ClockTick(SteadyClock::now()), false);
+        p->MakeFrame(p->NowTick(), false);
     for (const std::shared_ptr<Watcher>& w : p->watchers) {
       if (w->Close(status, last)) pump.push_back(w);
     }

@@ -75,7 +75,8 @@ struct Frame {
   uint64_t shot_id = 0;
   std::shared_ptr<const billiards::TableModel> model;
   std::vector<billiards::Ball> balls;
-  SteadyClock::time_point published;  ///< when the tick made it (publish-to-write latency)
+  SteadyClock::time_point published;  ///< when the tick was due, or when a call made it
+                                      ///< (the start of publish-to-write latency)
 };
 
 using EventPtr = std::shared_ptr<const v1::TableEvent>;
@@ -106,6 +107,8 @@ class LatencyHistogram {
   /// The upper edge of the bucket holding quantile q of what was added (seconds); 0 if empty.
   /// `since` subtracts an earlier copy, for a window.
   double Quantile(double q, const std::vector<int64_t>& since = {}) const;
+  /// The same over bucket counts (e.g. a window: later Counts() minus earlier ones).
+  static double QuantileOf(const std::vector<int64_t>& counts, double q);
   std::vector<int64_t> Counts() const;
 
  private:
@@ -115,7 +118,7 @@ class LatencyHistogram {
 /// Totals over every watcher of a registry.
 struct WatchCounters {
   std::atomic<int64_t> sent{0}, replaced{0}, resyncs{0};
-  LatencyHistogram publish_to_write;  ///< from the tick's frame to the start of its write
+  LatencyHistogram publish_to_write;  ///< from the tick's deadline to the start of its write
 };
 
 /// One reader of a table: the newest unsent frame (latest wins) and every unsent event. Thread

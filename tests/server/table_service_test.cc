@@ -169,16 +169,24 @@ TEST_F(TableServiceTest, AStalledWatcherNeverDelaysAReader) {
   }
   ASSERT_TRUE(ended);
   ASSERT_GT(arrivals.size(), 60u);
-  // Snapshots every 1/60 s; allow a loaded 2-core machine 150 ms for the worst gap.
+  // Snapshots every 1/60 s; a loaded 2-core machine (or AddressSanitizer) gets 0.5 s for the
+  // worst gap, still far less than the stalled stream's wait.
   double worst = 0;
   for (size_t i = 1; i < arrivals.size(); ++i) {
     worst = std::max(worst, std::chrono::duration<double>(arrivals[i] - arrivals[i - 1]).count());
   }
-  EXPECT_LT(worst, 0.15);
-  // The stalled stream fell behind and was given the newest snapshots only.
-  const TableStats stats = app_->tables().stats();
-  EXPECT_GT(stats.snapshots_replaced, 0);
-  EXPECT_EQ(stats.watchers, 2);
+  EXPECT_LT(worst, 0.5);
+  EXPECT_EQ(app_->tables().stats().watchers, 2);
+  // Now the stalled client reads: what was buffered, then the newest snapshot with every event
+  // it missed. Its own counter shows snapshots were replaced while it stalled.
+  bool stalled_saw_end = false;
+  uint64_t stalled_replaced = 0;
+  while (!stalled_saw_end && stalled->Read(&snap)) {
+    stalled_replaced = std::max(stalled_replaced, snap.snapshots_replaced());
+    for (const v1::TableEvent& e : snap.events()) stalled_saw_end |= e.kind() == v1::shot_end;
+  }
+  EXPECT_TRUE(stalled_saw_end);
+  EXPECT_GT(stalled_replaced, 0u);
   // Disconnecting both leaves no watcher behind.
   stalled_ctx.TryCancel();
   ctx.TryCancel();

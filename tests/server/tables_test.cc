@@ -139,18 +139,15 @@ v1::ShootRequest Shot(const v1::CreateTableResponse& t, int seat, v1::CueStrike 
 }
 
 // The same shot fast-forwarded by SimulateShot.
-v1::SimulateShotResponse Reference(const v1::CreateTableRequest& table, const v1::CueStrike& s) {
+v1::SimulateShotResponse Reference(const v1::CreateTableRequest& table, const v1::CueStrike& s,
+                                   double table_dt_s = 0) {
   v1::SimulateShotRequest req;
   *req.mutable_table() = table.table();
   *req.mutable_solver() = table.solver();
   *req.mutable_strike() = s;
   absl::StatusOr<ShotJob> job = ShotJobFromProto(req);
   EXPECT_TRUE(job.ok()) << job.status();
-  if (table.solver().engine() == v1::ENGINE_STEPPED && !table.solver().has_dt_s()) {
-    // The table picks the largest step <= 1/960 s that divides its tick.
-    const double period = 1.0 / table.tick_hz();
-    job->solver.dt_s = period / std::ceil(period * 960.0 - 1e-9);
-  }
+  if (table_dt_s > 0) job->solver.dt_s = table_dt_s;  // the step the table chose
   absl::StatusOr<b::ShotResult> result =
       b::SimulateShot(job->table.model, job->solver, job->table.state, job->shot);
   EXPECT_TRUE(result.ok()) << result.status();
@@ -252,7 +249,10 @@ TEST_F(TablesTest, ShotEndsBitIdenticalToSimulateShotOnBothEngines) {
       ASSERT_TRUE(shot.ok()) << shot.status();
       absl::StatusOr<v1::TableInfo> info = WaitAtRest(reg_, t.table_id());
       ASSERT_TRUE(info.ok()) << info.status();
-      const v1::SimulateShotResponse want = Reference(r, strike);
+      if (engine == v1::ENGINE_STEPPED) {
+        EXPECT_EQ(t.dt_s(), 1.0 / (hz > 960 ? 1000 : 960));
+      }
+      const v1::SimulateShotResponse want = Reference(r, strike, t.dt_s());
       ExpectSameBalls(info->balls(), want.balls());
       // The summary agrees with the reference's events.
       const v1::ShotSummary& s = info->last_shot();
@@ -473,7 +473,7 @@ TEST_F(TablesTest, WatcherSeesEveryEventAndTheFinalStateWhileAStalledOneStaysBou
   EXPECT_TRUE(got.back().at_rest());
   // At 60 Hz on a 1 kHz table the reader got roughly one snapshot per 1/60 s of the shot.
   const double shot_s = info->last_shot().duration_s();
-  EXPECT_GT(static_cast<double>(got.size()), 0.5 * 60 * shot_s);
+  EXPECT_GT(static_cast<double>(got.size()), 0.25 * 60 * shot_s);
   EXPECT_LT(static_cast<double>(got.size()), 1.5 * 60 * shot_s + 5);
   // The stalled watcher got one write (the first snapshot), still in flight; its backlog of 32
   // events overflowed, so it is marked for a resync, never grown without bound.
@@ -521,8 +521,9 @@ TEST_F(TablesTest, LatestWinsAndEventsRideAlong) {
   EXPECT_FALSE(got[1].resync());
   // Cancelled: finished once, nothing written after.
   w.OnCancel();
-  EXPECT_FALSE(w.Offer(frame(5), {}) && sink.got().size() > 2);
+  w.Offer(frame(5), {event(5)});
   w.OnWriteDone(false);
+  EXPECT_EQ(sink.got().size(), 2u);
   EXPECT_TRUE(sink.finished());
   EXPECT_EQ(sink.status().code(), absl::StatusCode::kCancelled);
 }
@@ -578,7 +579,7 @@ TEST_F(TablesTest, ResumeReplaysHeldEventsOrResyncs) {
   FakeSink ahead;
   EXPECT_EQ(reg_.Watch(w, &ahead).status().code(), absl::StatusCode::kOutOfRange);
   w.clear_from_sequence();
-  w.set_rate_hz(5000);
+  w.set_rate_hz(5000);  // over 1000 Hz
   EXPECT_EQ(reg_.Watch(w, &ahead).status().code(), absl::StatusCode::kInvalidArgument);
   w.set_rate_hz(0);
   w.add_fields(static_cast<v1::SnapshotField>(99));
@@ -607,7 +608,9 @@ TEST_F(TablesTest, WatcherLimitAndFieldsAndChangedOnly) {
   const v1::TableSnapshot first = sinks[0]->got().at(0);
   ASSERT_EQ(first.balls_size(), 10);
   EXPECT_NE(first.balls(0).x_m(), 0.0);
-  EXPECT_EQ(first.balls(0).qw(), 0.0);  // orientation not asked for
+  EXPECT_TRUE(first.balls(0).has_x_m());
+  EXPECT_FALSE(first.balls(0).has_qw());  // orientation not asked for: absent, not zero
+  EXPECT_FALSE(first.balls(0).has_vx_mps());
   // A placement: with changed_only, only the moved ball comes next.
   sinks[0]->StartReading(watchers[0], std::chrono::microseconds(100));
   v1::PlaceBallRequest place;
@@ -652,7 +655,7 @@ TEST_F(TablesTest, ShutdownEndsStreamsWithALastSnapshotAndRefusesCalls) {
 }
 
 TEST_F(TablesTest, TheSameShotGivesTheSameBitsOnManyTablesAtOnce) {
-  // Eight tables struck together share two workers; load and timing do not reach the physics.
+  // Eight tables struck together share the workers; load and timing do not reach the physics.
   std::vector<v1::CreateTableResponse> tables;
   for (int i = 0; i < 8; ++i) tables.push_back(Create(QuickTable(1000)));
   for (const v1::CreateTableResponse& t : tables) {
