@@ -69,7 +69,7 @@ class Watch final : public grpc::ClientReadReactor<v1::TableSnapshot> {
     // the table at rest.
     bool idle = snap_.resync() && snap_.at_rest();
     for (const v1::TableEvent& e : snap_.events()) idle |= e.kind() == v1::shot_end;
-    if (idle) idle_->store(true);
+    if (idle && idle_ != nullptr) idle_->store(true);
     StartRead(&snap_);
   }
   void OnDone(const grpc::Status&) override {
@@ -146,8 +146,10 @@ int Run() {
       req.set_rate_hz(absl::GetFlag(FLAGS_watch_hz));
       req.set_changed_only(absl::GetFlag(FLAGS_changed_only));
       if (absl::GetFlag(FLAGS_positions_only)) req.add_fields(v1::SNAPSHOT_FIELD_POSITION);
-      watches.push_back(std::make_unique<Watch>(
-          stubs[watches.size() % stubs.size()].get(), req, &tables[i]->idle));
+      // Only the first watcher of a table decides when it is idle (the others would re-flag a
+      // shot_end the shooter already acted on).
+      watches.push_back(std::make_unique<Watch>(stubs[watches.size() % stubs.size()].get(), req,
+                                                w == 0 ? &tables[i]->idle : nullptr));
     }
   }
 
