@@ -392,7 +392,20 @@ struct Table {
       if (w->Offer(frame, fresh)) pump->push_back(w);
     }
   }
-  EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+  // The seat of `token`, which must be the seat to play when `to_play`. Also refuses a table
+  // deleted or shutting down.
+  absl::StatusOr<int> Authorize(const std::string& token, bool to_play) const
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    if (absl::Status gone = Gone(); !gone.ok()) return gone;
+    const int seat = SeatOf(token);
+    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
+    if (to_play && seat != static_cast<int>(turn)) {
+      return absl::PermissionDeniedError(
+          absl::StrFormat("token: it is seat %d's turn, not seat %d's", turn, seat));
+    }
+    return seat;
+  }
+    EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     e.set_sequence(sequence);
     auto p = std::make_shared<const v1::TableEvent>(std::move(e));
     log.push_back(p);
@@ -735,9 +748,9 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
   v1::ResetTableResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
-    const int seat = t.SeatOf(request.token());
-    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
+    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/false);
+    if (!authorized.ok()) return authorized.status();
+    const int seat = *authorized;
     const int64_t tick = t.NowTick();
     ++t.sequence;
     std::vector<EventPtr> fresh;
@@ -781,13 +794,9 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
   v1::PlaceBallResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
-    const int seat = t.SeatOf(request.token());
-    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
-    if (seat != static_cast<int>(t.turn)) {
-      return absl::PermissionDeniedError(absl::StrFormat(
-          "token: it is seat %d's turn, not seat %d's", t.turn, seat));
-    }
+    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/true);
+    if (!authorized.ok()) return authorized.status();
+    const int seat = *authorized;
     if (t.sim != nullptr) {
       return absl::FailedPreconditionError(absl::StrFormat(
           "balls are still moving (shot %d); place balls when every ball is at rest",
@@ -850,13 +859,9 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
   v1::ShootResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
-    const int seat = t.SeatOf(request.token());
-    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
-    if (seat != static_cast<int>(t.turn)) {
-      return absl::PermissionDeniedError(absl::StrFormat(
-          "token: it is seat %d's turn, not seat %d's", t.turn, seat));
-    }
+    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/true);
+    if (!authorized.ok()) return authorized.status();
+    const int seat = *authorized;
     if (request.has_next_seat() && request.next_seat() >= t.seats.size()) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "next_seat must be in [0, %d], got %d", t.seats.size() - 1, request.next_seat()));
@@ -935,14 +940,9 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
   v1::SetTurnResponse response;
   {
     absl::MutexLock lock(&t.mu);
-    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
-    const int seat = t.SeatOf(request.token());
-    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
-    if (seat != static_cast<int>(t.turn)) {
-      return absl::PermissionDeniedError(absl::StrFormat(
-          "token: it is seat %d's turn, not seat %d's: only the seat to play passes the turn",
-          t.turn, seat));
-    }
+    // Only the seat to play passes the turn.
+    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/true);
+    if (!authorized.ok()) return authorized.status();
     if (request.seat() >= t.seats.size()) {
       return absl::InvalidArgumentError(absl::StrFormat("seat must be in [0, %d], got %d",
                                                         t.seats.size() - 1, request.seat()));
