@@ -739,18 +739,34 @@ void EndShot(Table& t, int64_t end_tick, const std::string& error, bool voided, 
 
 }  // namespace
 
-absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTableRequest& request) {
-  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+// The shape of every seat's call: check the token, find the table, then under its lock check
+// the seat (and the turn) and run `fn`, which offers to the watchers it names in `pump`; pump
+// them once the lock is released.
+template <typename Response, typename Fn>
+absl::StatusOr<Response> TableRegistry::Act(const std::string& table_id, const std::string& token,
+                                            bool to_play, Fn fn) {
+  if (absl::Status s = CheckToken(token); !s.ok()) return s;
+  absl::StatusOr<std::shared_ptr<Table>> found = Find(table_id);
   if (!found.ok()) return found.status();
-  Table& t = **found;
   std::vector<std::shared_ptr<Watcher>> pump;
-  v1::ResetTableResponse response;
+  absl::StatusOr<Response> response;
   {
-    absl::MutexLock lock(&t.mu);
-    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/false);
-    if (!authorized.ok()) return authorized.status();
-    const int seat = *authorized;
+    absl::MutexLock lock(&(*found)->mu);
+    absl::StatusOr<int> seat = (*found)->Authorize(token, to_play);
+    if (!seat.ok()) return seat.status();
+    response = fn(*found, *seat, pump);
+  }
+  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
+  return response;
+}
+
+absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTableRequest& request) {
+  return Act<v1::ResetTableResponse>(
+      request.table_id(), request.token(), /*to_play=*/false,
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::ResetTableResponse> {
+    Table& t = *ptr;
+    v1::ResetTableResponse response;
     const int64_t tick = t.NowTick();
     ++t.sequence;
     std::vector<EventPtr> fresh;
@@ -759,7 +775,7 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
       moving_.fetch_sub(1);
       // The tick wake is void; the watchers (if any) get heartbeats again.
       if (!t.watchers.empty()) {
-        Schedule(t, *found, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
+        Schedule(t, ptr, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
       } else {
         ++t.wake_generation;
       }
@@ -774,29 +790,23 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
     t.OfferAll(frame, fresh, &pump);
     response.set_sequence(t.sequence);
     response.set_tick(tick);
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  return response;
+    return response;
+  });
 }
 
 absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRequest& request) {
-  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
   const v1::BallPlacement& p = request.ball();
   if (absl::Status s = CheckId("ball.id", p.id()); !s.ok()) return s;
   if (!std::isfinite(p.x_m()) || !std::isfinite(p.y_m())) {
     return absl::InvalidArgumentError(
         absl::StrFormat("ball: x_m and y_m must be finite, got (%g, %g)", p.x_m(), p.y_m()));
   }
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
-  if (!found.ok()) return found.status();
-  Table& t = **found;
-  std::vector<std::shared_ptr<Watcher>> pump;
-  v1::PlaceBallResponse response;
-  {
-    absl::MutexLock lock(&t.mu);
-    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/true);
-    if (!authorized.ok()) return authorized.status();
-    const int seat = *authorized;
+  return Act<v1::PlaceBallResponse>(
+      request.table_id(), request.token(), /*to_play=*/true,
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::PlaceBallResponse> {
+    Table& t = *ptr;
+    v1::PlaceBallResponse response;
     if (t.sim != nullptr) {
       return absl::FailedPreconditionError(absl::StrFormat(
           "balls are still moving (shot %d); place balls when every ball is at rest",
@@ -841,27 +851,20 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
     t.OfferAll(frame, fresh, &pump);
     response.set_sequence(t.sequence);
     response.set_tick(tick);
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  return response;
+    return response;
+  });
 }
 
 absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& request) {
-  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
   if (!request.has_strike()) return absl::InvalidArgumentError("strike: required");
   absl::StatusOr<b::CueStrike> strike = StrikeFromProto(request.strike());
   if (!strike.ok()) return strike.status();
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
-  if (!found.ok()) return found.status();
-  const std::shared_ptr<Table>& ptr = *found;
-  Table& t = *ptr;
-  std::vector<std::shared_ptr<Watcher>> pump;
-  v1::ShootResponse response;
-  {
-    absl::MutexLock lock(&t.mu);
-    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/true);
-    if (!authorized.ok()) return authorized.status();
-    const int seat = *authorized;
+  return Act<v1::ShootResponse>(
+      request.table_id(), request.token(), /*to_play=*/true,
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::ShootResponse> {
+    Table& t = *ptr;
+    v1::ShootResponse response;
     if (request.has_next_seat() && request.next_seat() >= t.seats.size()) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "next_seat must be in [0, %d], got %d", t.seats.size() - 1, request.next_seat()));
@@ -926,23 +929,18 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     response.set_start_tick(start);
     StrikeReportToProto(*outcome, response.mutable_strike());
     Schedule(t, ptr, t.Deadline(start + 1));
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  return response;
+    return response;
+  });
 }
 
 absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequest& request) {
-  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
-  if (!found.ok()) return found.status();
-  Table& t = **found;
-  std::vector<std::shared_ptr<Watcher>> pump;
-  v1::SetTurnResponse response;
-  {
-    absl::MutexLock lock(&t.mu);
-    // Only the seat to play passes the turn.
-    absl::StatusOr<int> authorized = t.Authorize(request.token(), /*to_play=*/true);
-    if (!authorized.ok()) return authorized.status();
+  // Only the seat to play passes the turn.
+  return Act<v1::SetTurnResponse>(
+      request.table_id(), request.token(), /*to_play=*/true,
+      [&](const std::shared_ptr<Table>& ptr, int /*seat*/,
+          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::SetTurnResponse> {
+    Table& t = *ptr;
+    v1::SetTurnResponse response;
     if (request.seat() >= t.seats.size()) {
       return absl::InvalidArgumentError(absl::StrFormat("seat must be in [0, %d], got %d",
                                                         t.seats.size() - 1, request.seat()));
@@ -961,9 +959,8 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
       t.OfferAll(frame, fresh, &pump);
     }
     response.set_sequence(t.sequence);
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  return response;
+    return response;
+  });
 }
 
 absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(

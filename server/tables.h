@@ -218,6 +218,9 @@ class TableRegistry {
   };
 
   absl::StatusOr<std::shared_ptr<Table>> Find(const std::string& id);
+  template <typename Response, typename Fn>
+  absl::StatusOr<Response> Act(const std::string& table_id, const std::string& token,
+                               bool to_play, Fn fn);
   /// Wakes a worker for `t` at `when`, superseding its previous wake. Call with t.mu held.
   void Schedule(Table& t, const std::shared_ptr<Table>& ptr, SteadyClock::time_point when)
       ABSL_LOCKS_EXCLUDED(sched_mu_);

@@ -170,6 +170,16 @@ class TablesTest : public ::testing::Test {
  protected:
   TableRegistry reg_{TableLimits{.max_tables = 8, .max_watchers_per_table = 4, .event_log = 64,
                                  .watcher_backlog = 32}};
+  // Registers `sink` as a watcher (bound, so it detaches when destroyed) and sends the first
+  // snapshot; null (and a test failure) if the registry refuses.
+  std::shared_ptr<Watcher> Attach(FakeSink& sink, const v1::WatchTableRequest& w) {
+    absl::StatusOr<std::shared_ptr<Watcher>> watcher = reg_.Watch(w, &sink);
+    EXPECT_TRUE(watcher.ok()) << watcher.status();
+    if (!watcher.ok()) return nullptr;
+    sink.Bind(*watcher);
+    (*watcher)->Pump();
+    return *watcher;
+  }
   v1::CreateTableResponse Create(const v1::CreateTableRequest& r = QuickTable()) {
     absl::StatusOr<v1::CreateTableResponse> t = reg_.Create(r);
     EXPECT_TRUE(t.ok()) << t.status();
@@ -398,11 +408,9 @@ TEST_F(TablesTest, DeleteNeedsASeatTokenAndEndsWatchers) {
   FakeSink sink;
   v1::WatchTableRequest w;
   w.set_table_id(t.table_id());
-  absl::StatusOr<std::shared_ptr<Watcher>> watcher = reg_.Watch(w, &sink);
-  ASSERT_TRUE(watcher.ok());
-  sink.Bind(*watcher);
-  (*watcher)->Pump();
-  sink.StartReading(*watcher, std::chrono::microseconds(200));
+  const std::shared_ptr<Watcher> watcher = Attach(sink, w);
+  ASSERT_NE(watcher, nullptr);
+  sink.StartReading(watcher, std::chrono::microseconds(200));
   v1::DeleteTableRequest del;
   del.set_table_id(t.table_id());
   del.set_token("not-a-token");
@@ -426,14 +434,10 @@ TEST_F(TablesTest, WatcherSeesEveryEventAndTheFinalStateWhileAStalledOneStaysBou
   v1::WatchTableRequest w;
   w.set_table_id(t.table_id());
   w.set_rate_hz(60);
-  absl::StatusOr<std::shared_ptr<Watcher>> rw = reg_.Watch(w, &reader);
-  absl::StatusOr<std::shared_ptr<Watcher>> sw = reg_.Watch(w, &stalled);
-  ASSERT_TRUE(rw.ok() && sw.ok());
-  reader.Bind(*rw);
-  stalled.Bind(*sw);
-  (*rw)->Pump();
-  (*sw)->Pump();
-  reader.StartReading(*rw, std::chrono::microseconds(100));
+  const std::shared_ptr<Watcher> rw = Attach(reader, w);
+  const std::shared_ptr<Watcher> sw = Attach(stalled, w);
+  ASSERT_TRUE(rw != nullptr && sw != nullptr);
+  reader.StartReading(rw, std::chrono::microseconds(100));
   // stalled: its first write never completes.
   const v1::CueStrike strike = Break(3.0);
   ASSERT_TRUE(reg_.Shoot(Shot(t, 0, strike)).ok());
@@ -478,8 +482,8 @@ TEST_F(TablesTest, WatcherSeesEveryEventAndTheFinalStateWhileAStalledOneStaysBou
   // The stalled watcher got one write (the first snapshot), still in flight; its backlog of 32
   // events overflowed, so it is marked for a resync, never grown without bound.
   EXPECT_EQ(stalled.got().size(), 1u);
-  EXPECT_EQ((*sw)->sent(), 1);
-  EXPECT_GT((*sw)->replaced(), 0);
+  EXPECT_EQ(sw->sent(), 1);
+  EXPECT_GT(sw->replaced(), 0);
   EXPECT_GT(reg_.stats().resyncs, 0);
 }
 
@@ -539,10 +543,8 @@ TEST_F(TablesTest, ResumeReplaysHeldEventsOrResyncs) {
   w.set_table_id(t.table_id());
   w.set_from_sequence(seq - 1);
   FakeSink recent;
-  absl::StatusOr<std::shared_ptr<Watcher>> rw = reg_.Watch(w, &recent);
-  ASSERT_TRUE(rw.ok());
-  recent.Bind(*rw);
-  (*rw)->Pump();
+  const std::shared_ptr<Watcher> rw = Attach(recent, w);
+  ASSERT_NE(rw, nullptr);
   ASSERT_EQ(recent.got().size(), 1u);
   const v1::TableSnapshot first = recent.got()[0];
   EXPECT_FALSE(first.resync());
@@ -563,10 +565,8 @@ TEST_F(TablesTest, ResumeReplaysHeldEventsOrResyncs) {
   }
   w.set_from_sequence(1);
   FakeSink old;
-  absl::StatusOr<std::shared_ptr<Watcher>> ow = reg_.Watch(w, &old);
-  ASSERT_TRUE(ow.ok());
-  old.Bind(*ow);
-  (*ow)->Pump();
+  const std::shared_ptr<Watcher> ow = Attach(old, w);
+  ASSERT_NE(ow, nullptr);
   ASSERT_EQ(old.got().size(), 1u);
   EXPECT_TRUE(old.got()[0].resync());
   EXPECT_EQ(old.got()[0].balls_size(), 11);  // the full state
@@ -596,11 +596,8 @@ TEST_F(TablesTest, WatcherLimitAndFieldsAndChangedOnly) {
   std::vector<std::shared_ptr<Watcher>> watchers;
   for (int i = 0; i < 4; ++i) {
     sinks.push_back(std::make_unique<FakeSink>());
-    absl::StatusOr<std::shared_ptr<Watcher>> x = reg_.Watch(w, sinks.back().get());
-    ASSERT_TRUE(x.ok());
-    watchers.push_back(*x);
-    sinks.back()->Bind(*x);
-    watchers.back()->Pump();
+    watchers.push_back(Attach(*sinks.back(), w));
+    ASSERT_NE(watchers.back(), nullptr);
   }
   FakeSink extra;
   absl::StatusOr<std::shared_ptr<Watcher>> x = reg_.Watch(w, &extra);
@@ -635,11 +632,9 @@ TEST_F(TablesTest, ShutdownEndsStreamsWithALastSnapshotAndRefusesCalls) {
   FakeSink sink;
   v1::WatchTableRequest w;
   w.set_table_id(t.table_id());
-  absl::StatusOr<std::shared_ptr<Watcher>> watcher = reg_.Watch(w, &sink);
-  ASSERT_TRUE(watcher.ok());
-  sink.Bind(*watcher);
-  (*watcher)->Pump();
-  sink.StartReading(*watcher, std::chrono::microseconds(100));
+  const std::shared_ptr<Watcher> watcher = Attach(sink, w);
+  ASSERT_NE(watcher, nullptr);
+  sink.StartReading(watcher, std::chrono::microseconds(100));
   ASSERT_TRUE(reg_.Shoot(Shot(t, 0, Break(3.0))).ok());
   std::this_thread::sleep_for(std::chrono::milliseconds(50));
   reg_.Shutdown(absl::UnavailableError("stopping"));
