@@ -99,7 +99,7 @@ int Run() {
   server::ServerConfig config{.listen = "127.0.0.1:0"};
   config.tables.max_tables = n + 1;
   config.tables.max_watchers_per_table = std::max(1, absl::GetFlag(FLAGS_watchers));
-  config.tables.workers = absl::GetFlag(FLAGS_workers);
+  config.tick_workers = absl::GetFlag(FLAGS_workers);
   absl::StatusOr<std::unique_ptr<server::ServerApp>> app = server::ServerApp::Start(config);
   if (!app.ok()) {
     std::fprintf(stderr, "sportsim-load: %s\n", std::string(app.status().message()).c_str());
@@ -233,7 +233,7 @@ int Run() {
       absl::GetFlag(FLAGS_watchers), absl::GetFlag(FLAGS_watch_hz),
       absl::GetFlag(FLAGS_changed_only) ? ", changed only" : "",
       absl::GetFlag(FLAGS_positions_only) ? ", positions only" : "",
-      config.tables.workers > 0 ? config.tables.workers
+      config.tick_workers > 0 ? config.tick_workers
                                 : static_cast<int>(std::thread::hardware_concurrency()),
       secs);
   std::printf("moving tables (end)      %d\n", b.stats.moving);

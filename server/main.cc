@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
   config.max_receive_message_bytes = absl::GetFlag(FLAGS_max_request_bytes);
   config.tables.max_tables = absl::GetFlag(FLAGS_max_tables);
   config.tables.max_watchers_per_table = absl::GetFlag(FLAGS_max_watchers_per_table);
-  config.tables.workers = absl::GetFlag(FLAGS_tick_workers);
+  config.tick_workers = absl::GetFlag(FLAGS_tick_workers);
   config.tables.max_catchup_ticks = absl::GetFlag(FLAGS_max_catchup_ticks);
   config.tables.event_log = absl::GetFlag(FLAGS_event_log);
   config.tables.watcher_backlog = absl::GetFlag(FLAGS_watcher_backlog);
@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
   } checks[] = {{"max_request_bytes", config.max_receive_message_bytes, 1024, 64 << 20},
                 {"max_tables", config.tables.max_tables, 1, 1000000},
                 {"max_watchers_per_table", config.tables.max_watchers_per_table, 1, 100000},
-                {"tick_workers", config.tables.workers, 0, 256},
+                {"tick_workers", config.tick_workers, 0, 256},
                 {"max_catchup_ticks", config.tables.max_catchup_ticks, 1, 100000},
                 {"event_log", config.tables.event_log, 1, 10000000},
                 {"watcher_backlog", config.tables.watcher_backlog, 1, 10000000}};

@@ -101,7 +101,8 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->host_ = address->host;
   app->services_.push_back(MakeInfoService());
   app->services_.push_back(MakeSwingService());
-  app->tables_ = std::make_unique<TableRegistry>(config.tables);
+  app->scheduler_ = std::make_unique<TickScheduler>(config.tick_workers);
+  app->tables_ = std::make_unique<TableRegistry>(config.tables, app->scheduler_.get());
   app->services_.push_back(MakeBilliardsService(app->tables_.get()));
 
   grpc::ServerBuilder builder;
@@ -125,6 +126,8 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
 ServerApp::~ServerApp() {
   Shutdown(absl::ZeroDuration());
   Wait();
+  // No wake may reach a registry being destroyed.
+  if (scheduler_ != nullptr) scheduler_->Stop();
 }
 
 std::string ServerApp::address() const {
@@ -136,6 +139,7 @@ void ServerApp::Shutdown(absl::Duration grace) {
   if (server_ == nullptr || shut_down_.exchange(true)) return;
   server_->GetHealthCheckService()->SetServingStatus(false);
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
+  scheduler_->Stop();
   server_->Shutdown(absl::ToChronoTime(absl::Now() + grace));
 }
 

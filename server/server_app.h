@@ -23,6 +23,7 @@ struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  ///< host:port ([v6]:port); port 0 = any free port
   int max_receive_message_bytes = 64 << 10;  ///< requests are small: 64 KiB (--max_request_bytes)
   int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
+  int tick_workers = 0;  ///< threads ticking every table and session; 0: one per core
   TableLimits tables;
 };
 
@@ -56,6 +57,7 @@ class ServerApp {
 
  private:
   ServerApp() = default;
+  std::unique_ptr<TickScheduler> scheduler_;  // stopped before the registries go
   std::unique_ptr<TableRegistry> tables_;  // outlives the services (destroyed after them)
   std::vector<std::unique_ptr<grpc::Service>> services_;
   std::unique_ptr<grpc::Server> server_;

@@ -10,6 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "server/billiards_convert.h"
 #include "server/status_util.h"
+#include "server/watcher_impl.h"
 #include "sim/billiards/cue.h"
 #include "sim/billiards/engine.h"
 #include "sim/billiards/referee.h"
@@ -20,113 +21,7 @@ namespace sportsim::server {
 namespace b = ::sportsim::billiards;
 
 // ---------------------------------------------------------------------------------------------
-// LatencyHistogram
-
-void LatencyHistogram::Add(std::chrono::nanoseconds d) {
-  const double us = std::max(1.0, static_cast<double>(d.count()) * 1e-3);
-  const int i = std::clamp(static_cast<int>(4.0 * std::log2(us)), 0, kBuckets - 1);
-  counts_[i].fetch_add(1, std::memory_order_relaxed);
-}
-
-std::vector<int64_t> LatencyHistogram::Counts() const {
-  std::vector<int64_t> out(kBuckets);
-  for (int i = 0; i < kBuckets; ++i) out[i] = counts_[i].load(std::memory_order_relaxed);
-  return out;
-}
-
-double LatencyHistogram::Quantile(double q, const std::vector<int64_t>& since) const {
-  std::vector<int64_t> c = Counts();
-  if (!since.empty()) {
-    for (int i = 0; i < kBuckets; ++i) c[i] -= since[i];
-  }
-  return QuantileOf(c, q);
-}
-
-double LatencyHistogram::QuantileOf(const std::vector<int64_t>& c, double q) {
-  int64_t total = 0;
-  for (int64_t n : c) total += n;
-  if (total == 0) return 0.0;
-  const double want = q * static_cast<double>(total);
-  int64_t seen = 0;
-  for (int i = 0; i < kBuckets; ++i) {
-    seen += c[i];
-    if (static_cast<double>(seen) >= want) return std::exp2((i + 1) / 4.0) * 1e-6;
-  }
-  return std::exp2(kBuckets / 4.0) * 1e-6;
-}
-
-// ---------------------------------------------------------------------------------------------
 // Watcher
-
-Watcher::Watcher(std::string table_id, WatchOptions options,
-                 std::shared_ptr<WatchCounters> counters)
-    : table_id_(std::move(table_id)),
-      options_(options),
-      counters_(counters != nullptr ? std::move(counters) : std::make_shared<WatchCounters>()) {}
-
-void Watcher::Attach(SnapshotSink* sink) {
-  absl::MutexLock lock(&mu_);
-  sink_ = sink;
-}
-
-bool Watcher::Offer(std::shared_ptr<const Frame> frame, const std::vector<EventPtr>& events) {
-  absl::MutexLock lock(&mu_);
-  if (finished_ || closing_) return false;
-  if (static_cast<int>(events_.size() + events.size()) > options_.backlog) {
-    // Too far behind: drop what is queued and send the full state with a resync marker.
-    lost_ += events_.size() + events.size();
-    events_.clear();
-    if (!resync_) counters_->resyncs.fetch_add(1);
-    resync_ = true;
-  } else {
-    events_.insert(events_.end(), events.begin(), events.end());
-  }
-  if (frame != nullptr) {
-    if (pending_ != nullptr && !pending_->heartbeat) {
-      ++replaced_;
-      counters_->replaced.fetch_add(1);
-    }
-    pending_ = std::move(frame);
-  }
-  return !in_flight_;
-}
-
-bool Watcher::OfferHeartbeat(std::shared_ptr<const Frame> frame) {
-  absl::MutexLock lock(&mu_);
-  if (finished_ || closing_ || pending_ != nullptr) return false;
-  pending_ = std::move(frame);
-  return !in_flight_;
-}
-
-void Watcher::MarkResync() {
-  absl::MutexLock lock(&mu_);
-  if (!resync_) counters_->resyncs.fetch_add(1);
-  resync_ = true;
-}
-
-bool Watcher::Due(int64_t tick) {
-  absl::MutexLock lock(&mu_);
-  const double k = static_cast<double>(tick);
-  if (k < next_due_) return false;
-  next_due_ += options_.interval_ticks;
-  if (next_due_ <= k) next_due_ = k + options_.interval_ticks;
-  return true;
-}
-
-bool Watcher::Close(const absl::Status& status, std::shared_ptr<const Frame> last) {
-  absl::MutexLock lock(&mu_);
-  if (finished_ || closing_) return false;
-  closing_ = true;
-  close_status_ = status;
-  if (last != nullptr) {
-    if (pending_ != nullptr && !pending_->heartbeat) {
-      ++replaced_;
-      counters_->replaced.fetch_add(1);
-    }
-    pending_ = std::move(last);
-  }
-  return !in_flight_;
-}
 
 namespace {
 
@@ -137,132 +32,32 @@ bool SameBall(const b::Ball& x, const b::Ball& y) {
 
 }  // namespace
 
-void Watcher::Build(v1::TableSnapshot* out) {
-  out->Clear();
-  out->set_table_id(table_id_);
-  const std::shared_ptr<const Frame> frame = std::move(pending_);
-  pending_ = nullptr;
-  uint64_t sequence = last_sequence_;
-  if (frame != nullptr) {
-    sequence = std::max(sequence, frame->sequence);
-    out->set_tick(frame->tick);
-    out->set_t_s(frame->t_s);
-    out->set_at_rest(frame->at_rest);
-    out->set_turn(frame->turn);
-    out->set_shot_id(frame->shot_id);
-    out->set_heartbeat(frame->heartbeat);
-    if (!frame->heartbeat) {
-      counters_->publish_to_write.Add(std::chrono::duration_cast<std::chrono::nanoseconds>(
-          SteadyClock::now() - frame->published));
-      const bool all = !options_.changed_only || resync_ || last_sent_ == nullptr ||
-                       last_sent_->balls.size() != frame->balls.size();
-      for (size_t i = 0; i < frame->balls.size(); ++i) {
-        const b::Ball& ball = frame->balls[i];
-        if (!all && SameBall(ball, last_sent_->balls[i])) continue;
-        v1::BallState* p = out->add_balls();
-        BallToProto(*frame->model, ball, p);
-        if (!options_.position) { p->clear_x_m(); p->clear_y_m(); }
-        if (!options_.velocity) { p->clear_vx_mps(); p->clear_vy_mps(); }
-        if (!options_.spin) { p->clear_wx_rps(); p->clear_wy_rps(); p->clear_wz_rps(); }
-        if (!options_.orientation) { p->clear_qw(); p->clear_qx(); p->clear_qy(); p->clear_qz(); }
-      }
-      last_sent_ = frame;
-    }
-  }
-  for (const EventPtr& e : events_) {
-    *out->add_events() = *e;
-    sequence = std::max(sequence, e->sequence());
-  }
-  events_.clear();
-  out->set_sequence(sequence);
-  last_sequence_ = sequence;
-  // A resync is announced with the full state; a heartbeat (no balls) leaves it for the next.
-  const bool full_state = frame != nullptr && !frame->heartbeat;
-  out->set_resync(resync_ && full_state);
-  out->set_events_lost(lost_);
-  out->set_snapshots_replaced(static_cast<uint64_t>(replaced_));
-  if (full_state) resync_ = false;
-  ++sent_;
-  counters_->sent.fetch_add(1);
-}
-
-void Watcher::Pump() {
-  enum { kNothing, kWrite, kWriteLast, kFinish } action = kNothing;
-  SnapshotSink* sink = nullptr;
-  absl::Status status;
-  {
-    absl::MutexLock lock(&mu_);
-    if (sink_ == nullptr || in_flight_ || finished_) return;
-    sink = sink_;
-    if (cancelled_) {
-      finished_ = true;
-      action = kFinish;
-      status = absl::CancelledError("the watcher went away");
-    } else if (pending_ != nullptr) {
-      // Events alone wait for the next snapshot (they ride along; the rate holds).
-      Build(&out_);
-      in_flight_ = true;
-      if (closing_ && pending_ == nullptr && events_.empty()) {
-        finished_ = true;
-        action = kWriteLast;
-        status = close_status_;
-      } else {
-        action = kWrite;
-      }
-    } else if (closing_) {
-      finished_ = true;
-      action = kFinish;
-      status = close_status_;
-    }
-  }
-  // The sink is alive: it is only destroyed after it was finished (OnDone), and we are the
-  // ones who decide to finish it.
-  switch (action) {
-    case kNothing: break;
-    case kWrite: sink->SinkWrite(&out_); break;
-    case kWriteLast: sink->SinkWriteLast(&out_, status); break;
-    case kFinish: sink->SinkFinish(status); break;
+void TableWatch::Fill(const WatchOptions& options, const std::string& table_id,
+                      const Frame& frame, const Frame* last_sent, bool full,
+                      v1::TableSnapshot* out) {
+  out->set_table_id(table_id);
+  out->set_tick(frame.tick);
+  out->set_t_s(frame.t_s);
+  out->set_at_rest(frame.at_rest);
+  out->set_turn(frame.turn);
+  out->set_shot_id(frame.shot_id);
+  out->set_heartbeat(frame.heartbeat);
+  if (frame.heartbeat) return;
+  const bool all = full || !options.changed_only || last_sent == nullptr ||
+                   last_sent->balls.size() != frame.balls.size();
+  for (size_t i = 0; i < frame.balls.size(); ++i) {
+    const b::Ball& ball = frame.balls[i];
+    if (!all && SameBall(ball, last_sent->balls[i])) continue;
+    v1::BallState* p = out->add_balls();
+    BallToProto(*frame.model, ball, p);
+    if (!options.position) { p->clear_x_m(); p->clear_y_m(); }
+    if (!options.velocity) { p->clear_vx_mps(); p->clear_vy_mps(); }
+    if (!options.spin) { p->clear_wx_rps(); p->clear_wy_rps(); p->clear_wz_rps(); }
+    if (!options.orientation) { p->clear_qw(); p->clear_qx(); p->clear_qy(); p->clear_qz(); }
   }
 }
 
-void Watcher::OnWriteDone(bool ok) {
-  {
-    absl::MutexLock lock(&mu_);
-    in_flight_ = false;
-    if (!ok) cancelled_ = true;  // the stream broke: finish it
-  }
-  Pump();
-}
-
-void Watcher::OnCancel() {
-  {
-    absl::MutexLock lock(&mu_);
-    cancelled_ = true;
-  }
-  Pump();
-}
-
-void Watcher::OnDone() {
-  absl::MutexLock lock(&mu_);
-  sink_ = nullptr;
-  finished_ = true;
-  pending_ = nullptr;
-  events_.clear();
-  last_sent_ = nullptr;
-}
-
-int64_t Watcher::sent() const {
-  absl::MutexLock lock(&mu_);
-  return sent_;
-}
-int64_t Watcher::replaced() const {
-  absl::MutexLock lock(&mu_);
-  return replaced_;
-}
-bool Watcher::closed() const {
-  absl::MutexLock lock(&mu_);
-  return finished_ || closing_;
-}
+template class BasicWatcher<TableWatch>;
 
 // ---------------------------------------------------------------------------------------------
 // Table
@@ -272,7 +67,13 @@ struct SeatEntry {
   std::string token;
 };
 
-struct Table {
+struct Table : Ticked, std::enable_shared_from_this<Table> {
+  explicit Table(TableRegistry* r) : registry(r) {}
+  void Wake(uint64_t generation, SteadyClock::time_point now) override {
+    registry->Process(shared_from_this(), generation, now);
+  }
+
+  TableRegistry* const registry;
   // Fixed at creation.
   std::string id;
   std::string preset;
@@ -464,11 +265,13 @@ constexpr double kDefaultSteppedDt = 1.0 / 960.0;
 // ---------------------------------------------------------------------------------------------
 // Registry
 
-TableRegistry::TableRegistry(TableLimits limits)
+TableRegistry::TableRegistry(TableLimits limits, TickScheduler* scheduler)
     : limits_(limits), counters_(std::make_shared<WatchCounters>()) {
-  int n = limits_.workers;
-  if (n <= 0) n = std::max(1u, std::thread::hardware_concurrency());
-  for (int i = 0; i < n; ++i) workers_.emplace_back([this] { WorkerLoop(); });
+  if (scheduler == nullptr) {
+    own_scheduler_ = std::make_unique<TickScheduler>(limits_.workers);
+    scheduler = own_scheduler_.get();
+  }
+  scheduler_ = scheduler;
 }
 
 TableRegistry::~TableRegistry() { Shutdown(absl::UnavailableError("the server is shutting down")); }
@@ -486,12 +289,7 @@ absl::StatusOr<std::shared_ptr<Table>> TableRegistry::Find(const std::string& id
 
 void TableRegistry::Schedule(Table& t, const std::shared_ptr<Table>& ptr,
                              SteadyClock::time_point when) {
-  const uint64_t generation = ++t.wake_generation;
-  absl::MutexLock lock(&sched_mu_);
-  if (stopping_) return;
-  const bool earliest = wakes_.empty() || when < wakes_.top().when;
-  wakes_.push(Wake{when, generation, ptr});
-  if (earliest) sched_cv_.Signal();
+  scheduler_->Schedule(ptr, ++t.wake_generation, when);
 }
 
 absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
@@ -523,7 +321,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   absl::StatusOr<b::SolverOptions> solver = SolverFromProto(request.solver());
   if (!solver.ok()) return solver.status();
 
-  auto table = std::make_shared<Table>();
+  auto table = std::make_shared<Table>(this);
   table->tick_hz = tick_hz;
   table->period_s = 1.0 / tick_hz;
   if (solver->engine == b::Engine::kStepped) {
@@ -971,14 +769,14 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
   Table& t = *ptr;
   WatchOptions options;
   options.changed_only = request.changed_only();
-  options.backlog = limits_.watcher_backlog;
+  double interval_ticks = 1.0;
   if (request.rate_hz() != 0) {
     if (absl::Status s = CheckFiniteInRange("rate_hz", request.rate_hz(), 0, true, 1000, false);
         !s.ok()) {
       return s;
     }
     // Above the table's tick rate is every tick.
-    options.interval_ticks = std::max(1.0, t.tick_hz / request.rate_hz());
+    interval_ticks = std::max(1.0, t.tick_hz / request.rate_hz());
   }
   if (request.fields_size() > 0) {
     options.position = options.velocity = options.spin = options.orientation = false;
@@ -994,7 +792,8 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
       }
     }
   }
-  auto watcher = std::make_shared<Watcher>(t.id, options, counters_);
+  auto watcher = std::make_shared<Watcher>(t.id, options, interval_ticks,
+                                           limits_.watcher_backlog, counters_);
   watcher->Attach(sink);
   {
     absl::MutexLock lock(&t.mu);
@@ -1040,36 +839,6 @@ void TableRegistry::Unwatch(const std::string& table_id, const Watcher* watcher)
   ws.erase(std::remove_if(ws.begin(), ws.end(),
                           [watcher](const std::shared_ptr<Watcher>& w) { return w.get() == watcher; }),
            ws.end());
-}
-
-void TableRegistry::WorkerLoop() {
-  for (;;) {
-    Wake wake;
-    {
-      absl::MutexLock lock(&sched_mu_);
-      for (;;) {
-        if (stopping_) return;
-        if (wakes_.empty()) {
-          sched_cv_.Wait(&sched_mu_);
-          continue;
-        }
-        const SteadyClock::time_point now = SteadyClock::now();
-        if (wakes_.top().when <= now) break;
-        sched_cv_.WaitWithTimeout(
-            &sched_mu_, absl::FromChrono(wakes_.top().when - now));
-      }
-      wake = wakes_.top();
-      wakes_.pop();
-      // Another worker may be waiting for the next one.
-      if (!wakes_.empty()) sched_cv_.Signal();
-    }
-    timespec c0{}, c1{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
-    Process(wake.table, wake.generation, SteadyClock::now());
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
-    tick_cpu_ns_.fetch_add((c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec),
-                           std::memory_order_relaxed);
-  }
 }
 
 void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generation,
@@ -1165,12 +934,6 @@ void TableRegistry::Shutdown(const absl::Status& status) {
     shut_down_ = true;
     for (auto& [id, t] : tables_) tables.push_back(t);
   }
-  {
-    absl::MutexLock lock(&sched_mu_);
-    stopping_ = true;
-    sched_cv_.SignalAll();
-  }
-  for (std::thread& w : workers_) w.join();
   std::vector<std::shared_ptr<Watcher>> pump;
   for (const std::shared_ptr<Table>& p : tables) {
     absl::MutexLock lock(&p->mu);
@@ -1182,8 +945,8 @@ void TableRegistry::Shutdown(const absl::Status& status) {
     }
   }
   for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  absl::MutexLock lock(&sched_mu_);
-  while (!wakes_.empty()) wakes_.pop();
+  // A wake in progress has finished (it saw the table closed, or ran before); pending ones go.
+  if (own_scheduler_ != nullptr) own_scheduler_->Stop();
 }
 
 TableStats TableRegistry::stats() const {
@@ -1192,7 +955,7 @@ TableStats TableRegistry::stats() const {
   s.late_ticks = late_ticks_.load();
   s.slipped_ticks = slipped_ticks_.load();
   s.events = events_.load();
-  s.tick_cpu_ns = tick_cpu_ns_.load();
+  s.tick_cpu_ns = scheduler_->cpu_ns();
   s.moving = moving_.load();
   std::vector<std::shared_ptr<Table>> tables;
   {

@@ -8,20 +8,17 @@
 // load or on when the worker got to the table: the same strike gives the same bits as
 // SimulateShot. A table at rest is not scheduled; its tick is read off the clock when asked.
 //
-// Locks: Registry::mu_ -> Table::mu -> Watcher::mu_ -> Registry::sched_mu_ (never the other
+// Locks: Registry::mu_ -> Table::mu -> Watcher::mu_ -> TickScheduler::mu_ (never the other
 // way). Sinks are only called with no lock held.
 #ifndef SPORTSIM_SERVER_TABLES_H_
 #define SPORTSIM_SERVER_TABLES_H_
 
-#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <queue>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "absl/base/thread_annotations.h"
@@ -29,20 +26,21 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "server/scheduler.h"
+#include "server/watcher.h"
 #include "sim/billiards/model.h"
 #include "sim/billiards/state.h"
 #include "sportsim/v1/billiards.pb.h"
 
 namespace sportsim::server {
 
-using SteadyClock = std::chrono::steady_clock;
-
 struct TableLimits {
   int max_tables = 2000;
   int max_watchers_per_table = 64;
   int event_log = 512;            ///< events a table holds for resuming watchers
   int watcher_backlog = 1024;     ///< events a watcher may have unsent before it is resynced
-  int workers = 0;                ///< tick threads; 0: one per core
+  int workers = 0;                ///< tick threads when the registry has its own scheduler;
+                                  ///< 0: one per core
   int max_catchup_ticks = 12;     ///< a table further behind slips instead of racing
   absl::Duration heartbeat = absl::Seconds(1);
   double max_shot_s = 600.0;      ///< simulated time after which a shot is stopped
@@ -58,7 +56,8 @@ struct TableStats {
   int64_t snapshots_replaced = 0;  ///< latest wins: offered but overtaken before being sent
   int64_t resyncs = 0;
   int64_t events = 0;          ///< table events produced
-  int64_t tick_cpu_ns = 0;     ///< thread CPU time the workers spent on tables
+  int64_t tick_cpu_ns = 0;     ///< thread CPU time the scheduler's workers spent (on every
+                               ///< kind of world they tick)
   int tables = 0;
   int moving = 0;
   int watchers = 0;
@@ -79,109 +78,34 @@ struct Frame {
                                       ///< (the start of publish-to-write latency)
 };
 
-using EventPtr = std::shared_ptr<const v1::TableEvent>;
-
-/// Where a watcher's snapshots go. At most one write is in flight: the owner calls
-/// Watcher::OnWriteDone when it completes. After SinkFinish or SinkWriteLast nothing more comes.
-class SnapshotSink {
- public:
-  virtual ~SnapshotSink() = default;
-  virtual void SinkWrite(const v1::TableSnapshot* snapshot) = 0;
-  virtual void SinkWriteLast(const v1::TableSnapshot* snapshot, const absl::Status& status) = 0;
-  virtual void SinkFinish(const absl::Status& status) = 0;
-};
-
+/// What a table's reader asked for.
 struct WatchOptions {
-  double interval_ticks = 1.0;  ///< tick_hz / rate_hz, >= 1
   bool position = true, velocity = true, spin = true, orientation = true;
   bool changed_only = false;
-  int backlog = 1024;
 };
 
-/// A lock-free histogram of durations: bucket i holds [2^(i/4), 2^((i+1)/4)) microseconds
-/// (about 19 % wide), from 1 us to 2^32 us.
-class LatencyHistogram {
- public:
-  static constexpr int kBuckets = 128;
-  void Add(std::chrono::nanoseconds d);
-  /// The upper edge of the bucket holding quantile q of what was added (seconds); 0 if empty.
-  /// `since` subtracts an earlier copy, for a window.
-  double Quantile(double q, const std::vector<int64_t>& since = {}) const;
-  /// The same over bucket counts (e.g. a window: later Counts() minus earlier ones).
-  static double QuantileOf(const std::vector<int64_t>& counts, double q);
-  std::vector<int64_t> Counts() const;
-
- private:
-  std::array<std::atomic<int64_t>, kBuckets> counts_{};
+/// The table kind of BasicWatcher (watcher.h).
+struct TableWatch {
+  using Frame = server::Frame;
+  using Event = v1::TableEvent;
+  using Snapshot = v1::TableSnapshot;
+  using Options = WatchOptions;
+  static void Fill(const WatchOptions& options, const std::string& table_id, const Frame& frame,
+                   const Frame* last_sent, bool full, v1::TableSnapshot* out);
 };
 
-/// Totals over every watcher of a registry.
-struct WatchCounters {
-  std::atomic<int64_t> sent{0}, replaced{0}, resyncs{0};
-  LatencyHistogram publish_to_write;  ///< from the tick's deadline to the start of its write
-};
-
-/// One reader of a table: the newest unsent frame (latest wins) and every unsent event. Thread
-/// safe; see SnapshotSink for the write protocol.
-class Watcher {
- public:
-  Watcher(std::string table_id, WatchOptions options,
-          std::shared_ptr<WatchCounters> counters = nullptr);
-
-  void Attach(SnapshotSink* sink);
-  /// Table side. Queues events and, if given, a frame (replacing an unsent one). Returns true
-  /// when the caller should Pump (no write in flight).
-  bool Offer(std::shared_ptr<const Frame> frame, const std::vector<EventPtr>& events);
-  /// A heartbeat: only when nothing else is pending.
-  bool OfferHeartbeat(std::shared_ptr<const Frame> frame);
-  /// Marks the reader as resynced (events after its resume point are gone).
-  void MarkResync();
-  /// The rate: true when tick k is due (and consumes it).
-  bool Due(int64_t tick);
-  /// Ends the stream after one last frame (table deleted, server stopping).
-  bool Close(const absl::Status& status, std::shared_ptr<const Frame> last);
-
-  /// Sink side, with no lock held: writes what is pending, or finishes.
-  void Pump();
-  void OnWriteDone(bool ok);
-  void OnCancel();
-  void OnDone();
-
-  int64_t sent() const;
-  int64_t replaced() const;
-  bool closed() const;
-
- private:
-  void Build(v1::TableSnapshot* out) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
-
-  const std::string table_id_;
-  const WatchOptions options_;
-  const std::shared_ptr<WatchCounters> counters_;
-  mutable absl::Mutex mu_;
-  SnapshotSink* sink_ ABSL_GUARDED_BY(mu_) = nullptr;
-  double next_due_ ABSL_GUARDED_BY(mu_) = 0.0;
-  std::shared_ptr<const Frame> pending_ ABSL_GUARDED_BY(mu_);
-  std::vector<EventPtr> events_ ABSL_GUARDED_BY(mu_);
-  std::shared_ptr<const Frame> last_sent_ ABSL_GUARDED_BY(mu_);
-  uint64_t last_sequence_ ABSL_GUARDED_BY(mu_) = 0;
-  bool resync_ ABSL_GUARDED_BY(mu_) = false;
-  uint64_t lost_ ABSL_GUARDED_BY(mu_) = 0;
-  bool in_flight_ ABSL_GUARDED_BY(mu_) = false;
-  bool finished_ ABSL_GUARDED_BY(mu_) = false;
-  bool cancelled_ ABSL_GUARDED_BY(mu_) = false;
-  bool closing_ ABSL_GUARDED_BY(mu_) = false;
-  absl::Status close_status_ ABSL_GUARDED_BY(mu_);
-  int64_t sent_ ABSL_GUARDED_BY(mu_) = 0;
-  int64_t replaced_ ABSL_GUARDED_BY(mu_) = 0;
-  v1::TableSnapshot out_;  // written only when no write is in flight
-};
+using Watcher = BasicWatcher<TableWatch>;
+using SnapshotSink = StreamSink<v1::TableSnapshot>;
+using EventPtr = Watcher::EventPtr;
 
 struct Table;
 
-/// Every table of the server, and the threads that tick them.
+/// Every table of the server. Ticks run on `scheduler` (shared with the other kinds of world;
+/// its owner stops it before destroying the registry), or on a scheduler of the registry's own
+/// with limits.workers threads.
 class TableRegistry {
  public:
-  explicit TableRegistry(TableLimits limits);
+  explicit TableRegistry(TableLimits limits, TickScheduler* scheduler = nullptr);
   ~TableRegistry();
   TableRegistry(const TableRegistry&) = delete;
   TableRegistry& operator=(const TableRegistry&) = delete;
@@ -202,29 +126,21 @@ class TableRegistry {
   /// Forgets a watcher whose stream is done.
   void Unwatch(const std::string& table_id, const Watcher* watcher);
 
-  /// Stops the tick threads and ends every stream with `status` after a last snapshot.
-  /// Afterwards every call fails with UNAVAILABLE. Idempotent.
+  /// Ends every stream with `status` after a last snapshot and stops ticking (stops its own
+  /// scheduler, if it has one). Afterwards every call fails with UNAVAILABLE. Idempotent.
   void Shutdown(const absl::Status& status);
 
   TableStats stats() const;
   const LatencyHistogram& publish_to_write() const { return counters_->publish_to_write; }
 
  private:
-  struct Wake {
-    SteadyClock::time_point when;
-    uint64_t generation;
-    std::shared_ptr<Table> table;
-    bool operator>(const Wake& o) const { return when > o.when; }
-  };
-
+  friend struct Table;
   absl::StatusOr<std::shared_ptr<Table>> Find(const std::string& id);
   template <typename Response, typename Fn>
   absl::StatusOr<Response> Act(const std::string& table_id, const std::string& token,
                                bool to_play, Fn fn);
   /// Wakes a worker for `t` at `when`, superseding its previous wake. Call with t.mu held.
-  void Schedule(Table& t, const std::shared_ptr<Table>& ptr, SteadyClock::time_point when)
-      ABSL_LOCKS_EXCLUDED(sched_mu_);
-  void WorkerLoop();
+  void Schedule(Table& t, const std::shared_ptr<Table>& ptr, SteadyClock::time_point when);
   void Process(const std::shared_ptr<Table>& table, uint64_t generation,
                SteadyClock::time_point now);
 
@@ -234,13 +150,10 @@ class TableRegistry {
   std::map<std::string, std::shared_ptr<Table>, std::less<>> tables_ ABSL_GUARDED_BY(mu_);
   bool shut_down_ ABSL_GUARDED_BY(mu_) = false;
 
-  absl::Mutex sched_mu_;
-  absl::CondVar sched_cv_;
-  std::priority_queue<Wake, std::vector<Wake>, std::greater<>> wakes_ ABSL_GUARDED_BY(sched_mu_);
-  bool stopping_ ABSL_GUARDED_BY(sched_mu_) = false;
-  std::vector<std::thread> workers_;
+  std::unique_ptr<TickScheduler> own_scheduler_;
+  TickScheduler* scheduler_;
 
-  std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0}, tick_cpu_ns_{0};
+  std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0};
   std::atomic<int> moving_{0};
 };
 

@@ -491,7 +491,7 @@ TEST_F(TablesTest, LatestWinsAndEventsRideAlong) {
   // The watcher alone: while a write is in flight, three frames come; one write carries the
   // newest and the events of all three.
   WatchOptions o;
-  Watcher w("t", o);
+  Watcher w("t", o, /*interval_ticks=*/1.0, /*backlog=*/1024);
   FakeSink sink;
   w.Attach(&sink);
   auto frame = [](uint64_t seq) {
