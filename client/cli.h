@@ -32,6 +32,8 @@ struct Context {
 /// every gRPC code number.
 inline constexpr int kUsageExit = 64;
 
+/// The name of a gRPC status code number ("NOT_FOUND"); "UNKNOWN" outside 0..16.
+const char* CodeName(int code);
 /// Prints "sportsim: CODE_NAME: message" to stderr; returns the exit status (the code number).
 int ReportRpcError(const grpc::Status& status);
 /// Prints "sportsim: usage: message" to stderr; returns kUsageExit.

@@ -173,16 +173,19 @@ std::unique_ptr<grpc::ClientContext> Context::NewCall() const {
   return c;
 }
 
-int ReportRpcError(const grpc::Status& status) {
+const char* CodeName(int code) {
   static constexpr const char* kNames[] = {
       "OK",        "CANCELLED",          "UNKNOWN",        "INVALID_ARGUMENT",
       "DEADLINE_EXCEEDED", "NOT_FOUND",  "ALREADY_EXISTS", "PERMISSION_DENIED",
       "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE",
       "UNIMPLEMENTED", "INTERNAL",       "UNAVAILABLE",    "DATA_LOSS",
       "UNAUTHENTICATED"};
+  return code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
+}
+
+int ReportRpcError(const grpc::Status& status) {
   const int code = static_cast<int>(status.error_code());
-  const char* name = code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
-  std::cerr << "sportsim: " << name << ": " << status.error_message() << "\n";
+  std::cerr << "sportsim: " << CodeName(code) << ": " << status.error_message() << "\n";
   return code == 0 ? 1 : code;
 }
 

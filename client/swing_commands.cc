@@ -10,6 +10,7 @@
 #include "absl/flags/flag.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
+#include "client/swing_flags.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
 ABSL_FLAG(std::string, integrator, "rk4", "Swing integrator: book|euler|semi_implicit_euler|rk4|dp45");
@@ -25,6 +26,14 @@ ABSL_FLAG(std::optional<double>, qbeta_until, std::nullopt, "When the wrist torq
 ABSL_FLAG(std::optional<double>, shoulder_accel, std::nullopt, "Shoulder acceleration toward the target (m/s^2); default 0.98");
 ABSL_FLAG(std::optional<double>, gamma, std::nullopt, "Arm angle at the top of the backswing (deg); default 135");
 ABSL_FLAG(std::optional<double>, beta0, std::nullopt, "Initial wrist cock (deg); default 120");
+ABSL_FLAG(std::optional<double>, arm_length, std::nullopt, "Arm length R, shoulder to wrists (m); default 0.62");
+ABSL_FLAG(std::optional<double>, club_length, std::nullopt, "Club length L, wrists to clubhead (m); default 1.1");
+ABSL_FLAG(std::optional<double>, arm_inertia, std::nullopt, "Arm moment of inertia about the shoulder (kg m^2); default 1.15");
+ABSL_FLAG(std::optional<double>, arm_first_moment, std::nullopt, "Arm first moment about the shoulder (kg m); default 2.263");
+ABSL_FLAG(std::optional<double>, club_inertia, std::nullopt, "Club moment of inertia about the wrists (kg m^2); default 0.08");
+ABSL_FLAG(std::optional<double>, club_mass, std::nullopt, "Club mass (kg); default 0.4");
+ABSL_FLAG(std::optional<double>, club_first_moment, std::nullopt, "Club first moment about the wrists (kg m); default 0.33");
+ABSL_FLAG(std::optional<double>, gravity, std::nullopt, "Gravity (m/s^2); default 9.8");
 ABSL_FLAG(std::vector<std::string>, disable, {}, "Effects to switch off (swing: gravity,shoulder_accel,wrist_torque; shot: see info)");
 ABSL_FLAG(int, stride, 0, "Keep every n-th step as a sample (0: automatic)");
 
@@ -40,50 +49,102 @@ std::optional<v1::SwingIntegrator> IntegratorFromName(const std::string& name) {
   return std::nullopt;
 }
 
-// Builds the request from the flags; returns a usage message on bad flags.
-std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
+}  // namespace
+
+std::optional<std::string> BuildSwingSolver(v1::SwingSolver* solver) {
   const std::optional<v1::SwingIntegrator> integrator =
       IntegratorFromName(absl::GetFlag(FLAGS_integrator));
   if (!integrator) {
     return "--integrator must be book, euler, semi_implicit_euler, rk4 or dp45, got '" +
            absl::GetFlag(FLAGS_integrator) + "'";
   }
-  r->mutable_solver()->set_integrator(*integrator);
-  if (auto v = absl::GetFlag(FLAGS_dt)) r->mutable_solver()->set_dt_s(*v);
-  if (auto v = absl::GetFlag(FLAGS_tolerance)) r->mutable_solver()->set_tolerance(*v);
-  if (auto v = absl::GetFlag(FLAGS_max_step)) r->mutable_solver()->set_max_step_s(*v);
-  const std::string until = absl::GetFlag(FLAGS_until);
-  if (until == "impact") r->set_stop(v1::SWING_STOP_IMPACT);
-  else if (until == "duration") r->set_stop(v1::SWING_STOP_DURATION);
-  else return "--until must be impact or duration, got '" + until + "'";
-  if (auto v = absl::GetFlag(FLAGS_duration)) r->set_duration_s(*v);
+  solver->set_integrator(*integrator);
+  if (auto v = absl::GetFlag(FLAGS_dt)) solver->set_dt_s(*v);
+  if (auto v = absl::GetFlag(FLAGS_tolerance)) solver->set_tolerance(*v);
+  if (auto v = absl::GetFlag(FLAGS_max_step)) solver->set_max_step_s(*v);
+  return std::nullopt;
+}
 
-  v1::SwingParameters* p = r->mutable_parameters();
+std::optional<std::string> BuildSwingStop(v1::SwingStop* stop, std::optional<double>* duration_s) {
+  const std::string until = absl::GetFlag(FLAGS_until);
+  if (until == "impact") *stop = v1::SWING_STOP_IMPACT;
+  else if (until == "duration") *stop = v1::SWING_STOP_DURATION;
+  else return "--until must be impact or duration, got '" + until + "'";
+  *duration_s = absl::GetFlag(FLAGS_duration);
+  return std::nullopt;
+}
+
+std::optional<std::string> BuildSwingParameters(v1::SwingParameters* p) {
   if (auto v = absl::GetFlag(FLAGS_shoulder_accel)) p->set_shoulder_accel_mps2(*v);
   if (auto v = absl::GetFlag(FLAGS_gamma)) p->set_gamma_deg(*v);
   if (auto v = absl::GetFlag(FLAGS_beta0)) p->set_beta0_deg(*v);
+  if (auto v = absl::GetFlag(FLAGS_arm_length)) p->set_arm_length_m(*v);
+  if (auto v = absl::GetFlag(FLAGS_club_length)) p->set_club_length_m(*v);
+  if (auto v = absl::GetFlag(FLAGS_arm_inertia)) p->set_arm_inertia_kgm2(*v);
+  if (auto v = absl::GetFlag(FLAGS_arm_first_moment)) p->set_arm_first_moment_kgm(*v);
+  if (auto v = absl::GetFlag(FLAGS_club_inertia)) p->set_club_inertia_kgm2(*v);
+  if (auto v = absl::GetFlag(FLAGS_club_mass)) p->set_club_mass_kg(*v);
+  if (auto v = absl::GetFlag(FLAGS_club_first_moment)) p->set_club_first_moment_kgm(*v);
+  if (auto v = absl::GetFlag(FLAGS_gravity)) p->set_gravity_mps2(*v);
+  return std::nullopt;
+}
 
-  // Torques: the chapter's program with the flags' changes.
+std::optional<std::string> BuildTorqueProgram(v1::TorqueProgram* torques) {
   const auto qa = absl::GetFlag(FLAGS_qalpha);
   const auto qb = absl::GetFlag(FLAGS_qbeta);
   const auto qb_until = absl::GetFlag(FLAGS_qbeta_until);
   if (qb_until && !(*qb_until > 0)) return "--qbeta-until must be a time after 0 s";
-  if (qa || qb || qb_until) {
-    v1::TorqueKnot* k = r->mutable_torques()->mutable_qalpha()->add_knots();
-    k->set_t_s(0);
-    k->set_torque_nm(qa.value_or(100.0));
-    v1::TorqueSchedule* b = r->mutable_torques()->mutable_qbeta();
-    b->add_knots()->set_torque_nm(qb.value_or(-10.0));
-    v1::TorqueKnot* off = b->add_knots();
-    off->set_t_s(qb_until.value_or(0.1));
-    off->set_torque_nm(0.0);
-  }
+  if (!qa && !qb && !qb_until) return std::nullopt;
+  v1::TorqueKnot* k = torques->mutable_qalpha()->add_knots();
+  k->set_t_s(0);
+  k->set_torque_nm(qa.value_or(100.0));
+  v1::TorqueSchedule* b = torques->mutable_qbeta();
+  b->add_knots()->set_torque_nm(qb.value_or(-10.0));
+  v1::TorqueKnot* off = b->add_knots();
+  off->set_t_s(qb_until.value_or(0.1));
+  off->set_torque_nm(0.0);
+  return std::nullopt;
+}
+
+std::optional<std::string> BuildSwingEffects(std::vector<v1::SwingEffect>* disabled) {
   for (const std::string& e : absl::GetFlag(FLAGS_disable)) {
-    if (e == "gravity") r->add_disabled_effects(v1::SWING_EFFECT_GRAVITY);
-    else if (e == "shoulder_accel") r->add_disabled_effects(v1::SWING_EFFECT_SHOULDER_ACCEL);
-    else if (e == "wrist_torque") r->add_disabled_effects(v1::SWING_EFFECT_WRIST_TORQUE);
+    if (e == "gravity") disabled->push_back(v1::SWING_EFFECT_GRAVITY);
+    else if (e == "shoulder_accel") disabled->push_back(v1::SWING_EFFECT_SHOULDER_ACCEL);
+    else if (e == "wrist_torque") disabled->push_back(v1::SWING_EFFECT_WRIST_TORQUE);
     else return "--disable takes gravity, shoulder_accel, wrist_torque; got '" + e + "'";
   }
+  return std::nullopt;
+}
+
+std::optional<double> ArmLengthFlag() { return absl::GetFlag(FLAGS_arm_length); }
+std::optional<double> ClubLengthFlag() { return absl::GetFlag(FLAGS_club_length); }
+
+std::string SwingCsvHeader() {
+  return "t_s,theta_deg,alpha_deg,beta_deg,phi_deg,clubhead_speed_mps\n";
+}
+
+std::string SwingCsvRow(const v1::SwingSample& s) {
+  return Num(s.t_s()) + ',' + Num(s.theta_deg()) + ',' + Num(s.alpha_deg()) + ',' +
+         Num(s.beta_deg()) + ',' + Num(s.phi_deg()) + ',' + Num(s.clubhead_speed_mps()) + '\n';
+}
+
+namespace {
+
+// Builds the request from the flags; returns a usage message on bad flags.
+std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
+  if (auto bad = BuildSwingSolver(r->mutable_solver())) return bad;
+  v1::SwingStop stop = v1::SWING_STOP_UNSPECIFIED;
+  std::optional<double> duration;
+  if (auto bad = BuildSwingStop(&stop, &duration)) return bad;
+  r->set_stop(stop);
+  if (duration) r->set_duration_s(*duration);
+  if (auto bad = BuildSwingParameters(r->mutable_parameters())) return bad;
+  v1::TorqueProgram torques;
+  if (auto bad = BuildTorqueProgram(&torques)) return bad;
+  if (torques.has_qalpha() || torques.has_qbeta()) *r->mutable_torques() = torques;
+  std::vector<v1::SwingEffect> disabled;
+  if (auto bad = BuildSwingEffects(&disabled)) return bad;
+  for (v1::SwingEffect e : disabled) r->add_disabled_effects(e);
   const int stride = absl::GetFlag(FLAGS_stride);
   if (stride < 0) return "--stride must be >= 0";
   r->set_sample_stride(static_cast<uint32_t>(stride));
@@ -110,12 +171,8 @@ void PrintText(const v1::SimulateSwingResponse& r) {
 }
 
 void PrintCsv(const v1::SimulateSwingResponse& r) {
-  std::cout << "t_s,theta_deg,alpha_deg,beta_deg,phi_deg,clubhead_speed_mps\n";
-  for (const v1::SwingSample& s : r.samples()) {
-    std::cout << Num(s.t_s()) << ',' << Num(s.theta_deg()) << ',' << Num(s.alpha_deg()) << ','
-              << Num(s.beta_deg()) << ',' << Num(s.phi_deg()) << ','
-              << Num(s.clubhead_speed_mps()) << '\n';
-  }
+  std::cout << SwingCsvHeader();
+  for (const v1::SwingSample& s : r.samples()) std::cout << SwingCsvRow(s);
 }
 
 int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
@@ -132,10 +189,17 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
 }  // namespace
 
 int RunSwing(const Context& ctx, const std::vector<std::string>& args) {
-  if (args.empty()) return UsageError("swing needs a subcommand: simulate");
+  static constexpr const char* kVerbs =
+      "simulate, create, list, get, delete, reset, start, watch, drive";
+  if (args.empty()) return UsageError(std::string("swing needs a subcommand: ") + kVerbs);
   const std::vector<std::string> rest(args.begin() + 1, args.end());
-  if (args[0] == "simulate") return RunSimulate(ctx, rest);
-  return UsageError("unknown swing subcommand '" + args[0] + "' (simulate)");
+  const std::string& verb = args[0];
+  if (verb == "simulate") return RunSimulate(ctx, rest);
+  if (verb == "create" || verb == "list" || verb == "get" || verb == "delete" ||
+      verb == "reset" || verb == "start" || verb == "watch" || verb == "drive") {
+    return RunSwingSession(ctx, verb, rest);
+  }
+  return UsageError("unknown swing subcommand '" + verb + "' (" + kVerbs + ")");
 }
 
 }  // namespace sportsim::cli

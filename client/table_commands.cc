@@ -23,23 +23,24 @@
 
 ABSL_DECLARE_FLAG(std::string, svg);
 
-ABSL_FLAG(int, seats, 0, "table create: number of seats (default 2)");
-ABSL_FLAG(std::vector<std::string>, seat_names, {}, "table create: seat names, comma separated");
-ABSL_FLAG(double, tick_hz, 0.0, "table create: ticks per second (default 120)");
-ABSL_FLAG(std::string, token, "", "The seat's token (table create printed it)");
+ABSL_FLAG(int, seats, 0, "table/swing create: number of seats (table default 2, swing 1)");
+ABSL_FLAG(std::vector<std::string>, seat_names, {}, "table/swing create: seat names, comma separated");
+ABSL_FLAG(double, tick_hz, 0.0, "table/swing create: ticks per second (table default 120, swing 400)");
+ABSL_FLAG(std::string, token, "", "The seat's token (table/swing create printed it)");
 ABSL_FLAG(std::optional<int>, next_seat, std::nullopt, "table shoot: pass the turn to this seat");
 ABSL_FLAG(std::optional<int>, seat, std::nullopt, "table turn: the seat to play next");
-ABSL_FLAG(double, rate, 30.0,
-          "table watch: snapshots per second at most (0, or above the tick rate: every tick)");
+ABSL_FLAG(std::optional<double>, rate, std::nullopt,
+          "table/swing watch, swing drive: snapshots per second at most (0, or above the tick "
+          "rate: every tick); default 30 for tables, every tick for swings");
 ABSL_FLAG(bool, until_rest, false,
           "table watch: exit after the first at-rest snapshot that follows a shot");
 ABSL_FLAG(std::vector<std::string>, fields, {},
           "table watch: position,velocity,spin,orientation (default all)");
 ABSL_FLAG(bool, changed_only, false, "table watch: only the balls that changed");
 ABSL_FLAG(std::optional<uint64_t>, from_sequence, std::nullopt,
-          "table watch: replay the events after this sequence, then go on");
-ABSL_FLAG(int, page_size, 0, "table list: tables per page (default 100)");
-ABSL_FLAG(std::string, page_token, "", "table list: the next_page_token of the previous page");
+          "table/swing watch: replay the events after this sequence, then go on");
+ABSL_FLAG(int, page_size, 0, "table/swing list: tables or sessions per page (default 100)");
+ABSL_FLAG(std::string, page_token, "", "table/swing list: the next_page_token of the previous page");
 ABSL_FLAG(bool, geometry, false, "table get: include cushions and pockets");
 
 namespace sportsim::cli {
@@ -276,7 +277,7 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   if (args.size() != 1) return UsageError("table watch ID [--rate HZ] [--until-rest]");
   v1::WatchTableRequest request;
   request.set_table_id(args[0]);
-  request.set_rate_hz(absl::GetFlag(FLAGS_rate));
+  request.set_rate_hz(absl::GetFlag(FLAGS_rate).value_or(30.0));
   request.set_changed_only(absl::GetFlag(FLAGS_changed_only));
   if (const auto from = absl::GetFlag(FLAGS_from_sequence)) request.set_from_sequence(*from);
   for (const std::string& f : absl::GetFlag(FLAGS_fields)) {

@@ -3,14 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <random>
-#include <time.h>
 #include <utility>
 
 #include "absl/strings/str_format.h"
 #include "server/billiards_convert.h"
 #include "server/status_util.h"
 #include "server/watcher_impl.h"
+#include "server/world.h"
 #include "sim/billiards/cue.h"
 #include "sim/billiards/engine.h"
 #include "sim/billiards/referee.h"
@@ -62,11 +61,6 @@ template class BasicWatcher<TableWatch>;
 // ---------------------------------------------------------------------------------------------
 // Table
 
-struct SeatEntry {
-  std::string name;
-  std::string token;
-};
-
 struct Table : Ticked, std::enable_shared_from_this<Table> {
   explicit Table(TableRegistry* r) : registry(r) {}
   void Wake(uint64_t generation, SteadyClock::time_point now) override {
@@ -81,13 +75,13 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
   std::shared_ptr<const b::TableModel> model;
   b::TableState initial;
   b::SolverOptions solver;
-  double tick_hz = 120.0;
+  double tick_hz = 120.0;  // == clock.tick_hz
   double period_s = 1.0 / 120.0;
   int64_t steps_per_tick = 0;  // stepped engine: dt_s * steps_per_tick = period
   std::vector<SeatEntry> seats;
 
   absl::Mutex mu;
-  SteadyClock::time_point origin ABSL_GUARDED_BY(mu);  // tick 0 (moves on when the table slips)
+  TickClock clock ABSL_GUARDED_BY(mu);
   int64_t tick ABSL_GUARDED_BY(mu) = 0;                 // last tick advanced or acted on
   uint64_t sequence ABSL_GUARDED_BY(mu) = 0;
   uint32_t turn ABSL_GUARDED_BY(mu) = 0;
@@ -112,20 +106,11 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
   uint64_t wake_generation ABSL_GUARDED_BY(mu) = 0;
 
   SteadyClock::time_point Deadline(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    return origin + std::chrono::nanoseconds(std::llround(static_cast<double>(k) * 1e9 / tick_hz));
-  }
-  // The last tick whose deadline has passed.
-  int64_t DueTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
-    int64_t k = std::max<int64_t>(0, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
-    while (Deadline(k + 1) <= now) ++k;
-    while (k > 0 && Deadline(k) > now) --k;
-    return k;
+    return clock.Deadline(k);
   }
   // The tick the clock is at (never behind the last tick advanced).
   int64_t ClockTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
-    return std::max(tick, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
+    return clock.Tick(now, tick);
   }
   // The tick now: the last one advanced while a shot moves, else the clock's.
   int64_t NowTick() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -158,20 +143,6 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
     f->published = ticked ? Deadline(k) : SteadyClock::now();
     return f;
   }
-  // Seat of a token, or -1. Compares every seat in full (no early exit on the first byte).
-  int SeatOf(const std::string& token) const {
-    int seat = -1;
-    for (size_t i = 0; i < seats.size(); ++i) {
-      const std::string& t = seats[i].token;
-      unsigned diff = t.size() != token.size() ? 1u : 0u;
-      for (size_t j = 0; j < t.size(); ++j) {
-        diff |= static_cast<unsigned char>(t[j]) ^
-                static_cast<unsigned char>(j < token.size() ? token[j] : 0);
-      }
-      if (diff == 0) seat = static_cast<int>(i);
-    }
-    return seat;
-  }
   // The shot's physics events, in table time, logged; the referee sees each.
   void LogShotEvents(const std::vector<b::Event>& events, int event_log,
                      std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -198,7 +169,7 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
   absl::StatusOr<int> Authorize(const std::string& token, bool to_play) const
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     if (absl::Status gone = Gone(); !gone.ok()) return gone;
-    const int seat = SeatOf(token);
+    const int seat = SeatOf(seats, token);
     if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
     if (to_play && seat != static_cast<int>(turn)) {
       return absl::PermissionDeniedError(
@@ -220,31 +191,12 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
 
 namespace {
 
-std::string RandomHex(int bytes) {
-  static absl::Mutex mu(absl::kConstInit);
-  static std::random_device* device = new std::random_device();
-  absl::MutexLock lock(&mu);
-  std::string out;
-  for (int i = 0; i < bytes; i += 4) {
-    const uint32_t v = (*device)();
-    out += absl::StrFormat("%08x", v);
-  }
-  return out.substr(0, 2 * bytes);
-}
-
 absl::Status Unavailable() { return absl::UnavailableError("the server is shutting down"); }
 
 absl::Status CheckTableId(const std::string& id) {
   if (id.empty() || id.size() > 64) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "table_id must be 1 to 64 characters, got %d characters", static_cast<int>(id.size())));
-  }
-  return absl::OkStatus();
-}
-
-absl::Status CheckToken(const std::string& token) {
-  if (token.empty() || token.size() > 128) {
-    return absl::InvalidArgumentError("token: give the seat's token (CreateTable returned it)");
   }
   return absl::OkStatus();
 }
@@ -298,24 +250,9 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 1000, false); !s.ok()) {
     return s;
   }
-  if (request.seats() > 16 || request.seat_names_size() > 16) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "seats must be in [1, 16], got %d seats and %d seat_names", request.seats(),
-        request.seat_names_size()));
-  }
-  const int n_seats = request.seats() != 0        ? static_cast<int>(request.seats())
-                      : request.seat_names_size() ? request.seat_names_size()
-                                                  : 2;
-  if (request.seat_names_size() > 0 && request.seat_names_size() != n_seats) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "seat_names: %d names for %d seats", request.seat_names_size(), n_seats));
-  }
-  for (int i = 0; i < request.seat_names_size(); ++i) {
-    if (absl::Status s = CheckId(absl::StrFormat("seat_names[%d]", i), request.seat_names(i));
-        !s.ok()) {
-      return s;
-    }
-  }
+  absl::StatusOr<std::vector<SeatEntry>> seats =
+      MakeSeats(request.seats(), request.seat_names(), /*default_count=*/2);
+  if (!seats.ok()) return seats.status();
   absl::StatusOr<TableBuild> build = TableFromProto(request.table());
   if (!build.ok()) return build.status();
   absl::StatusOr<b::SolverOptions> solver = SolverFromProto(request.solver());
@@ -323,6 +260,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
 
   auto table = std::make_shared<Table>(this);
   table->tick_hz = tick_hz;
+  table->clock.tick_hz = tick_hz;
   table->period_s = 1.0 / tick_hz;
   if (solver->engine == b::Engine::kStepped) {
     // Ticks must end on the step grid, so that a shot's states do not depend on the ticks.
@@ -352,19 +290,11 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   table->initial = build->state;
   table->solver = *solver;
   v1::CreateTableResponse response;
-  for (int i = 0; i < n_seats; ++i) {
-    SeatEntry seat{.name = request.seat_names_size() > 0 ? request.seat_names(i)
-                                                           : absl::StrFormat("%d", i),
-                   .token = RandomHex(16)};
-    v1::Seat* out = response.add_seats();
-    out->set_seat(static_cast<uint32_t>(i));
-    out->set_name(seat.name);
-    out->set_token(seat.token);
-    table->seats.push_back(std::move(seat));
-  }
+  table->seats = *std::move(seats);
+  SeatsToProto(table->seats, /*with_tokens=*/true, response.mutable_seats());
   {
     absl::MutexLock lock(&table->mu);
-    table->origin = SteadyClock::now();
+    table->clock.origin = SteadyClock::now();
     table->rest = table->initial;
   }
   absl::MutexLock lock(&mu_);
@@ -401,11 +331,7 @@ absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& requ
   info.set_sequence(t.sequence);
   info.set_at_rest(t.sim == nullptr);
   info.set_turn(t.turn);
-  for (size_t i = 0; i < t.seats.size(); ++i) {
-    v1::Seat* s = info.add_seats();
-    s->set_seat(static_cast<uint32_t>(i));
-    s->set_name(t.seats[i].name);
-  }
+  SeatsToProto(t.seats, /*with_tokens=*/false, info.mutable_seats());
   for (const b::Ball& ball : t.Balls().balls) BallToProto(*t.model, ball, info.add_balls());
   info.set_shots(t.shots);
   if (t.shots > 0) *info.mutable_last_shot() = t.last_shot;
@@ -458,7 +384,7 @@ absl::StatusOr<v1::ListTablesResponse> TableRegistry::List(const v1::ListTablesR
 
 absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
   if (absl::Status s = CheckTableId(request.table_id()); !s.ok()) return s;
-  if (absl::Status s = CheckToken(request.token()); !s.ok()) return s;
+  if (absl::Status s = CheckToken(request.token(), "CreateTable"); !s.ok()) return s;
   std::shared_ptr<Table> table;
   {
     absl::MutexLock lock(&mu_);
@@ -469,7 +395,7 @@ absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
     }
     table = it->second;
     // The token is checked before anything changes.
-    if (table->SeatOf(request.token()) < 0) {
+    if (SeatOf(table->seats, request.token()) < 0) {
       return absl::PermissionDeniedError("token: not a seat of this table");
     }
     tables_.erase(it);
@@ -543,7 +469,7 @@ void EndShot(Table& t, int64_t end_tick, const std::string& error, bool voided, 
 template <typename Response, typename Fn>
 absl::StatusOr<Response> TableRegistry::Act(const std::string& table_id, const std::string& token,
                                             bool to_play, Fn fn) {
-  if (absl::Status s = CheckToken(token); !s.ok()) return s;
+  if (absl::Status s = CheckToken(token, "CreateTable"); !s.ok()) return s;
   absl::StatusOr<std::shared_ptr<Table>> found = Find(table_id);
   if (!found.ok()) return found.status();
   std::vector<std::shared_ptr<Watcher>> pump;
@@ -857,20 +783,13 @@ void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generati
       }
       Schedule(t, ptr, now + absl::ToChronoNanoseconds(limits_.heartbeat));
     } else {
-      const int64_t due = t.DueTick(now);
+      const int64_t due = t.clock.DueTick(now);
       if (due <= t.tick) {
         Schedule(t, ptr, t.Deadline(t.tick + 1));
       } else {
-        int64_t target = due;
-        if (due - t.tick > limits_.max_catchup_ticks) {
-          // Too far behind to catch up: the table's clock slips (it runs slower than real
-          // time for a moment) instead of spending ever more ticks on being late.
-          const int64_t slip = due - t.tick - limits_.max_catchup_ticks;
-          t.origin += std::chrono::nanoseconds(
-              std::llround(static_cast<double>(slip) * 1e9 / t.tick_hz));
-          slipped_ticks_.fetch_add(slip);
-          target = t.tick + limits_.max_catchup_ticks;
-        }
+        int64_t slipped = 0;
+        int64_t target = t.clock.CatchUp(t.tick, due, limits_.max_catchup_ticks, &slipped);
+        if (slipped > 0) slipped_ticks_.fetch_add(slipped);
         // Tick by tick, so that the tick a shot ends on (or is stopped on) does not depend on
         // how many ticks one visit covers. For the event engine a tick without events is a
         // few evaluations; the stepped engine does the same steps either way.

@@ -1,0 +1,108 @@
+#include "server/world.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "absl/strings/str_format.h"
+#include "absl/synchronization/mutex.h"
+#include "server/billiards_convert.h"
+
+namespace sportsim::server {
+
+std::string RandomHex(int bytes) {
+  static absl::Mutex mu(absl::kConstInit);
+  static std::random_device* device = new std::random_device();
+  absl::MutexLock lock(&mu);
+  std::string out;
+  for (int i = 0; i < bytes; i += 4) {
+    const uint32_t v = (*device)();
+    out += absl::StrFormat("%08x", v);
+  }
+  return out.substr(0, 2 * static_cast<size_t>(bytes));
+}
+
+absl::Status CheckToken(const std::string& token, std::string_view what) {
+  if (token.empty() || token.size() > 128) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("token: give the seat's token (%s returned it)", what));
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<std::vector<SeatEntry>> MakeSeats(
+    uint32_t count, const google::protobuf::RepeatedPtrField<std::string>& names,
+    int default_count) {
+  if (count > 16 || names.size() > 16) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "seats must be in [1, 16], got %d seats and %d seat_names", count, names.size()));
+  }
+  const int n = count != 0 ? static_cast<int>(count) : names.size() > 0 ? names.size()
+                                                                        : default_count;
+  if (names.size() > 0 && names.size() != n) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("seat_names: %d names for %d seats", names.size(), n));
+  }
+  for (int i = 0; i < names.size(); ++i) {
+    if (absl::Status s = CheckId(absl::StrFormat("seat_names[%d]", i), names[i]); !s.ok()) {
+      return s;
+    }
+  }
+  std::vector<SeatEntry> seats;
+  for (int i = 0; i < n; ++i) {
+    seats.push_back(SeatEntry{.name = names.size() > 0 ? names[i] : absl::StrFormat("%d", i),
+                              .token = RandomHex(16)});
+  }
+  return seats;
+}
+
+void SeatsToProto(const std::vector<SeatEntry>& seats, bool with_tokens,
+                  google::protobuf::RepeatedPtrField<v1::Seat>* out) {
+  for (size_t i = 0; i < seats.size(); ++i) {
+    v1::Seat* s = out->Add();
+    s->set_seat(static_cast<uint32_t>(i));
+    s->set_name(seats[i].name);
+    if (with_tokens) s->set_token(seats[i].token);
+  }
+}
+
+int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token) {
+  int seat = -1;
+  for (size_t i = 0; i < seats.size(); ++i) {
+    const std::string& t = seats[i].token;
+    unsigned diff = t.size() != token.size() ? 1u : 0u;
+    for (size_t j = 0; j < t.size(); ++j) {
+      diff |= static_cast<unsigned char>(t[j]) ^
+              static_cast<unsigned char>(j < token.size() ? token[j] : 0);
+    }
+    if (diff == 0) seat = static_cast<int>(i);
+  }
+  return seat;
+}
+
+SteadyClock::time_point TickClock::Deadline(int64_t k) const {
+  return origin + std::chrono::nanoseconds(std::llround(static_cast<double>(k) * 1e9 / tick_hz));
+}
+
+int64_t TickClock::DueTick(SteadyClock::time_point now) const {
+  const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
+  int64_t k = std::max<int64_t>(0, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
+  while (Deadline(k + 1) <= now) ++k;
+  while (k > 0 && Deadline(k) > now) --k;
+  return k;
+}
+
+int64_t TickClock::Tick(SteadyClock::time_point now, int64_t floor) const {
+  const double ns = std::chrono::duration<double, std::nano>(now - origin).count();
+  return std::max(floor, static_cast<int64_t>(std::floor(ns * tick_hz * 1e-9)));
+}
+
+int64_t TickClock::CatchUp(int64_t done, int64_t due, int max_catchup, int64_t* slipped) {
+  *slipped = 0;
+  if (due - done <= max_catchup) return due;
+  *slipped = due - done - max_catchup;
+  origin += std::chrono::nanoseconds(std::llround(static_cast<double>(*slipped) * 1e9 / tick_hz));
+  return done + max_catchup;
+}
+
+}  // namespace sportsim::server

@@ -1,0 +1,65 @@
+// What every authoritative world (billiards table, swing session) has in common besides the
+// scheduler and the watchers: seats with secret tokens, and a tick clock. No gRPC here
+// (protobuf only, for the Seat message).
+#ifndef SPORTSIM_SERVER_WORLD_H_
+#define SPORTSIM_SERVER_WORLD_H_
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "google/protobuf/repeated_field.h"
+#include "sportsim/v1/common.pb.h"
+
+namespace sportsim::server {
+
+using SteadyClock = std::chrono::steady_clock;
+
+/// `bytes` random bytes as lower-case hex, from std::random_device.
+std::string RandomHex(int bytes);
+
+/// A token must be 1 to 128 characters (`what`: "CreateTable", "CreateSession").
+absl::Status CheckToken(const std::string& token, std::string_view what);
+
+struct SeatEntry {
+  std::string name;
+  std::string token;  ///< 128 random bits, hex
+};
+
+/// Seats for a create request: `count` (0: the number of names, or `default_count`) seats in
+/// [1, 16], each with a fresh token, named `names` (1 to 32 characters each) or "0", "1", ...
+absl::StatusOr<std::vector<SeatEntry>> MakeSeats(
+    uint32_t count, const google::protobuf::RepeatedPtrField<std::string>& names,
+    int default_count);
+
+/// The seats as protos, with or without their tokens.
+void SeatsToProto(const std::vector<SeatEntry>& seats, bool with_tokens,
+                  google::protobuf::RepeatedPtrField<v1::Seat>* out);
+
+/// The seat whose token this is, or -1. Compares every seat in full (no early exit).
+int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token);
+
+/// Tick k of a world falls due at origin + k / tick_hz on the monotonic clock.
+struct TickClock {
+  SteadyClock::time_point origin;  ///< tick 0 (moves on when the world slips)
+  double tick_hz = 1.0;
+
+  SteadyClock::time_point Deadline(int64_t k) const;
+  /// The last tick whose deadline has passed.
+  int64_t DueTick(SteadyClock::time_point now) const;
+  /// The tick the clock is at, never below `floor`.
+  int64_t Tick(SteadyClock::time_point now, int64_t floor) const;
+  /// The tick to advance to from `done` when `due` is due: `due`, or if that is more than
+  /// `max_catchup` ticks ahead, `done + max_catchup` with the origin moved on so that the world
+  /// runs slower than real time for a moment instead of spending ever more ticks being late.
+  /// `slipped` gets the ticks skipped that way.
+  int64_t CatchUp(int64_t done, int64_t due, int max_catchup, int64_t* slipped);
+};
+
+}  // namespace sportsim::server
+
+#endif  // SPORTSIM_SERVER_WORLD_H_
