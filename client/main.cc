@@ -37,7 +37,21 @@ Commands:
       --integrator book|euler|semi_implicit_euler|rk4|dp45  --dt S  --tolerance X
       --max-step S  --duration S  --until impact|duration  --qalpha NM  --qbeta NM
       --qbeta-until S  --shoulder-accel MPS2  --gamma DEG  --beta0 DEG
-      --disable gravity,shoulder_accel,wrist_torque  --stride N
+      --disable gravity,shoulder_accel,wrist_torque  --stride N  [golfer/club flags:
+      --arm-length M --club-length M --arm-inertia KGM2 --arm-first-moment KGM
+      --club-inertia KGM2 --club-mass KG --club-first-moment KGM --gravity MPS2]
+  swing create [golfer/club, solver and --disable flags of swing simulate] [--tick-hz HZ]
+      [--seats N] [--seat-names A,B] [--profile realistic|arcade]   a live swing session;
+      prints its id and seat 0's token
+  swing list [--page-size N --page-token T] | swing get ID
+  swing start ID --token T [torque flags of swing simulate: --qalpha --qbeta --qbeta-until
+      --until --duration]            a swing with that torque program from the next tick
+  swing reset ID --token T [--gamma DEG] [--beta0 DEG] | swing delete ID --token T
+  swing watch ID [--rate HZ] [--until-impact] [--from-sequence N] [--svg FILE]
+      one sample per state (--format jsonl|csv|text); the impact's line carries "impact"
+  swing drive ID --token T [--rate HZ] [--apply-late] [--until impact|duration]
+      [--duration S] [--svg FILE]    live torques from stdin, one t_s,qalpha_nm,qbeta_nm a
+      line (a first line at t_s 0 gives the starting torques); prints the states as watch
   flight simulate [flags]   fly a golf ball from launch conditions to landing:
       --ball-speed MPS --launch-deg DEG --spin-rpm RPM  [--spin-axis-deg DEG]
       [--launch-direction-deg DEG] [--wind MPS[,TOWARD_DEG[,log]]] [--temperature-c C]

@@ -43,7 +43,7 @@ ABSL_FLAG(std::vector<std::string>, enable, {}, "Effects off by default to switc
 ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mirror");
 ABSL_FLAG(std::optional<double>, sample_rate, std::nullopt, "Trajectory samples per second");
 ABSL_FLAG(std::optional<double>, max_time, std::nullopt, "Stop after this much simulated time (s)");
-ABSL_FLAG(std::string, svg, "", "Write a top view of the shot to this SVG file");
+ABSL_FLAG(std::string, svg, "", "Write a picture to this SVG file (shots, tables: top view; swings: stroboscopic side view)");
 
 namespace sportsim::cli {
 

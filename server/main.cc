@@ -22,7 +22,11 @@ ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(3),
 ABSL_FLAG(int, max_request_bytes, 64 << 10, "Largest request message accepted (bytes)");
 ABSL_FLAG(int, max_tables, 2000, "Most tables the server holds at once");
 ABSL_FLAG(int, max_watchers_per_table, 64, "Most WatchTable streams per table");
-ABSL_FLAG(int, tick_workers, 0, "Threads that tick the tables; 0: one per core");
+ABSL_FLAG(int, max_sessions, 2000, "Most swing sessions the server holds at once");
+ABSL_FLAG(int, max_watchers_per_session, 64,
+          "Most WatchSwing and DriveSwing streams per swing session");
+ABSL_FLAG(int, tick_workers, 0,
+          "Threads that tick the tables and swing sessions (one pool); 0: one per core");
 ABSL_FLAG(int, max_catchup_ticks, 12,
           "A table further behind its clock than this slips (runs slower than real time) instead "
           "of racing to catch up");
@@ -52,6 +56,10 @@ int main(int argc, char** argv) {
   config.tables.max_catchup_ticks = absl::GetFlag(FLAGS_max_catchup_ticks);
   config.tables.event_log = absl::GetFlag(FLAGS_event_log);
   config.tables.watcher_backlog = absl::GetFlag(FLAGS_watcher_backlog);
+  config.sessions.max_sessions = absl::GetFlag(FLAGS_max_sessions);
+  config.sessions.max_watchers_per_session = absl::GetFlag(FLAGS_max_watchers_per_session);
+  config.sessions.max_catchup_ticks = config.tables.max_catchup_ticks;
+  config.sessions.watcher_backlog = config.tables.watcher_backlog;
   const struct {
     const char* name;
     int value, lo, hi;
@@ -61,7 +69,9 @@ int main(int argc, char** argv) {
                 {"tick_workers", config.tick_workers, 0, 256},
                 {"max_catchup_ticks", config.tables.max_catchup_ticks, 1, 100000},
                 {"event_log", config.tables.event_log, 1, 10000000},
-                {"watcher_backlog", config.tables.watcher_backlog, 1, 10000000}};
+                {"watcher_backlog", config.tables.watcher_backlog, 1, 10000000},
+                {"max_sessions", config.sessions.max_sessions, 1, 1000000},
+                {"max_watchers_per_session", config.sessions.max_watchers_per_session, 1, 100000}};
   for (const auto& c : checks) {
     if (c.value < c.lo || c.value > c.hi) {
       std::cerr << "sportsim-server: --" << c.name << " must be in [" << c.lo << ", " << c.hi

@@ -100,9 +100,10 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   std::unique_ptr<ServerApp> app(new ServerApp());
   app->host_ = address->host;
   app->services_.push_back(MakeInfoService());
-  app->services_.push_back(MakeSwingService());
   app->scheduler_ = std::make_unique<TickScheduler>(config.tick_workers);
   app->tables_ = std::make_unique<TableRegistry>(config.tables, app->scheduler_.get());
+  app->sessions_ = std::make_unique<SessionRegistry>(config.sessions, app->scheduler_.get());
+  app->services_.push_back(MakeSwingService(app->sessions_.get()));
   app->services_.push_back(MakeBilliardsService(app->tables_.get()));
 
   grpc::ServerBuilder builder;
@@ -139,6 +140,7 @@ void ServerApp::Shutdown(absl::Duration grace) {
   if (server_ == nullptr || shut_down_.exchange(true)) return;
   server_->GetHealthCheckService()->SetServingStatus(false);
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
+  sessions_->Shutdown(absl::UnavailableError("the server is shutting down"));
   scheduler_->Stop();
   server_->Shutdown(absl::ToChronoTime(absl::Now() + grace));
 }

@@ -10,6 +10,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "server/sessions.h"
 #include "server/tables.h"
 
 namespace grpc {
@@ -25,6 +26,7 @@ struct ServerConfig {
   int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
   int tick_workers = 0;  ///< threads ticking every table and session; 0: one per core
   TableLimits tables;
+  SessionLimits sessions;
 };
 
 /// host and port of a listen address.
@@ -46,6 +48,7 @@ class ServerApp {
 
   int port() const { return port_; }
   TableRegistry& tables() { return *tables_; }
+  SessionRegistry& sessions() { return *sessions_; }
   std::string address() const;
 
   /// Marks health NOT_SERVING, ends every WatchTable stream (UNAVAILABLE after a last
@@ -58,7 +61,8 @@ class ServerApp {
  private:
   ServerApp() = default;
   std::unique_ptr<TickScheduler> scheduler_;  // stopped before the registries go
-  std::unique_ptr<TableRegistry> tables_;  // outlives the services (destroyed after them)
+  std::unique_ptr<TableRegistry> tables_;  // the registries outlive the services
+  std::unique_ptr<SessionRegistry> sessions_;
   std::vector<std::unique_ptr<grpc::Service>> services_;
   std::unique_ptr<grpc::Server> server_;
   std::string host_;

@@ -5,6 +5,7 @@
 
 #include "server/billiards_convert.h"
 #include "server/status_util.h"
+#include "server/sessions.h"
 #include "server/tables.h"
 #include "sim/billiards/shot.h"
 #include "sim/core/cpu_clock.h"
@@ -37,7 +38,185 @@ class InfoService final : public v1::Server::CallbackService {
   }
 };
 
+// Unary calls on the registry: the status, or the response.
+template <typename Response, typename Fn>
+grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* ctx, Response* response, Fn fn) {
+  auto* reactor = ctx->DefaultReactor();
+  absl::StatusOr<Response> result = fn();
+  if (result.ok()) *response = *std::move(result);
+  reactor->Finish(ToGrpcStatus(result.status()));
+  return reactor;
+}
+
+// One watch stream (WatchTable, WatchSwing): the registry's watcher decides what to write and
+// when; this reactor only carries it to gRPC and back.
+template <typename Registry, typename Watcher, typename Request>
+class WatchReactor final : public grpc::ServerWriteReactor<typename Watcher::Snapshot>,
+                           public StreamSink<typename Watcher::Snapshot> {
+ public:
+  using Snapshot = typename Watcher::Snapshot;
+  WatchReactor(Registry* registry, const Request& request, std::string id)
+      : registry_(registry), id_(std::move(id)) {
+    absl::StatusOr<std::shared_ptr<Watcher>> watcher = registry->Watch(request, this);
+    if (!watcher.ok()) {
+      this->Finish(ToGrpcStatus(watcher.status()));
+      return;
+    }
+    watcher_ = *std::move(watcher);
+    watcher_->Pump();
+  }
+
+  void SinkWrite(const Snapshot* snapshot) override { this->StartWrite(snapshot); }
+  void SinkWriteLast(const Snapshot* snapshot, const absl::Status& status) override {
+    this->StartWriteAndFinish(snapshot, grpc::WriteOptions(), ToGrpcStatus(status));
+  }
+  void SinkFinish(const absl::Status& status) override { this->Finish(ToGrpcStatus(status)); }
+
+  void OnWriteDone(bool ok) override { watcher_->OnWriteDone(ok); }
+  void OnCancel() override {
+    if (watcher_ != nullptr) watcher_->OnCancel();
+  }
+  void OnDone() override {
+    if (watcher_ != nullptr) {
+      watcher_->OnDone();
+      registry_->Unwatch(id_, watcher_.get());
+    }
+    delete this;
+  }
+
+ private:
+  Registry* const registry_;
+  const std::string id_;
+  std::shared_ptr<Watcher> watcher_;
+};
+
+// One DriveSwing stream: reads the start message and then torque commands; what it writes is
+// decided by the driver's watcher, as for WatchSwing. Reads and writes run concurrently; `mu_`
+// guards the drive, which the first read sets.
+class DriveReactor final : public grpc::ServerBidiReactor<v1::DriveSwingRequest, v1::SwingSnapshot>,
+                           public SwingSink {
+ public:
+  explicit DriveReactor(SessionRegistry* registry) : registry_(registry) { StartRead(&request_); }
+
+  void SinkWrite(const v1::SwingSnapshot* snapshot) override { StartWrite(snapshot); }
+  void SinkWriteLast(const v1::SwingSnapshot* snapshot, const absl::Status& status) override {
+    StartWriteAndFinish(snapshot, grpc::WriteOptions(), ToGrpcStatus(status));
+  }
+  void SinkFinish(const absl::Status& status) override { Finish(ToGrpcStatus(status)); }
+
+  void OnReadDone(bool ok) override {
+    std::shared_ptr<Drive> drive = Current();
+    if (!ok) {
+      // The client half-closed (or the call is going away): the stream ends after a last
+      // snapshot; the swing goes on.
+      if (drive != nullptr) {
+        registry_->EndDrive(*drive, /*half_closed=*/true);
+      } else {
+        Finish(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "DriveSwing: the first message must be `start`"));
+      }
+      return;
+    }
+    if (drive == nullptr) {
+      if (!request_.has_start()) {
+        Finish(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "DriveSwing: the first message must be `start`"));
+        return;
+      }
+      absl::StatusOr<std::shared_ptr<Drive>> started = registry_->StartDrive(request_.start(), this);
+      if (!started.ok()) {
+        Finish(ToGrpcStatus(started.status()));
+        return;
+      }
+      drive = *started;
+      {
+        absl::MutexLock lock(&mu_);
+        drive_ = drive;
+      }
+      drive->watcher->Pump();
+    } else if (request_.has_torque()) {
+      registry_->Command(*drive, request_.torque());
+    } else {
+      registry_->Refuse(*drive, absl::InvalidArgumentError(
+                                    "only the first message may be `start`; then `torque`"));
+    }
+    StartRead(&request_);
+  }
+
+  void OnWriteDone(bool ok) override { Current()->watcher->OnWriteDone(ok); }
+  void OnCancel() override {
+    if (std::shared_ptr<Drive> drive = Current()) drive->watcher->OnCancel();
+  }
+  void OnDone() override {
+    if (std::shared_ptr<Drive> drive = Current()) {
+      drive->watcher->OnDone();
+      registry_->EndDrive(*drive, /*half_closed=*/false);
+    }
+    delete this;
+  }
+
+ private:
+  std::shared_ptr<Drive> Current() {
+    absl::MutexLock lock(&mu_);
+    return drive_;
+  }
+
+  SessionRegistry* const registry_;
+  v1::DriveSwingRequest request_;
+  absl::Mutex mu_;
+  std::shared_ptr<Drive> drive_ ABSL_GUARDED_BY(mu_);
+};
+
 class SwingService final : public v1::Swing::CallbackService {
+ public:
+  explicit SwingService(SessionRegistry* sessions) : sessions_(sessions) {}
+
+ private:
+  SessionRegistry* const sessions_;
+
+  grpc::ServerUnaryReactor* CreateSession(grpc::CallbackServerContext* ctx,
+                                          const v1::CreateSessionRequest* request,
+                                          v1::CreateSessionResponse* response) override {
+    return Unary(ctx, response, [&] { return sessions_->Create(*request); });
+  }
+  grpc::ServerUnaryReactor* GetSession(grpc::CallbackServerContext* ctx,
+                                       const v1::GetSessionRequest* request,
+                                       v1::SessionInfo* response) override {
+    return Unary(ctx, response, [&] { return sessions_->Get(*request); });
+  }
+  grpc::ServerUnaryReactor* ListSessions(grpc::CallbackServerContext* ctx,
+                                         const v1::ListSessionsRequest* request,
+                                         v1::ListSessionsResponse* response) override {
+    return Unary(ctx, response, [&] { return sessions_->List(*request); });
+  }
+  grpc::ServerUnaryReactor* DeleteSession(grpc::CallbackServerContext* ctx,
+                                          const v1::DeleteSessionRequest* request,
+                                          v1::DeleteSessionResponse* response) override {
+    return Unary(ctx, response, [&]() -> absl::StatusOr<v1::DeleteSessionResponse> {
+      if (absl::Status s = sessions_->Delete(*request); !s.ok()) return s;
+      return v1::DeleteSessionResponse();
+    });
+  }
+  grpc::ServerUnaryReactor* StartSwing(grpc::CallbackServerContext* ctx,
+                                       const v1::StartSwingRequest* request,
+                                       v1::StartSwingResponse* response) override {
+    return Unary(ctx, response, [&] { return sessions_->Start(*request); });
+  }
+  grpc::ServerUnaryReactor* ResetSwing(grpc::CallbackServerContext* ctx,
+                                       const v1::ResetSwingRequest* request,
+                                       v1::ResetSwingResponse* response) override {
+    return Unary(ctx, response, [&] { return sessions_->Reset(*request); });
+  }
+  grpc::ServerBidiReactor<v1::DriveSwingRequest, v1::SwingSnapshot>* DriveSwing(
+      grpc::CallbackServerContext*) override {
+    return new DriveReactor(sessions_);
+  }
+  grpc::ServerWriteReactor<v1::SwingSnapshot>* WatchSwing(
+      grpc::CallbackServerContext*, const v1::WatchSwingRequest* request) override {
+    return new WatchReactor<SessionRegistry, SwingWatcher, v1::WatchSwingRequest>(
+        sessions_, *request, request->session_id());
+  }
+
   grpc::ServerUnaryReactor* SimulateSwing(grpc::CallbackServerContext* ctx,
                                           const v1::SimulateSwingRequest* request,
                                           v1::SimulateSwingResponse* response) override {
@@ -84,56 +263,6 @@ class SwingService final : public v1::Swing::CallbackService {
     return absl::OkStatus();
   }
 };
-
-// One WatchTable stream: the registry's Watcher decides what to write and when; this reactor
-// only carries it to gRPC and back.
-class WatchReactor final : public grpc::ServerWriteReactor<v1::TableSnapshot>,
-                           public SnapshotSink {
- public:
-  WatchReactor(TableRegistry* registry, const v1::WatchTableRequest& request)
-      : registry_(registry), table_id_(request.table_id()) {
-    absl::StatusOr<std::shared_ptr<Watcher>> watcher = registry->Watch(request, this);
-    if (!watcher.ok()) {
-      Finish(ToGrpcStatus(watcher.status()));
-      return;
-    }
-    watcher_ = *std::move(watcher);
-    watcher_->Pump();
-  }
-
-  void SinkWrite(const v1::TableSnapshot* snapshot) override { StartWrite(snapshot); }
-  void SinkWriteLast(const v1::TableSnapshot* snapshot, const absl::Status& status) override {
-    StartWriteAndFinish(snapshot, grpc::WriteOptions(), ToGrpcStatus(status));
-  }
-  void SinkFinish(const absl::Status& status) override { Finish(ToGrpcStatus(status)); }
-
-  void OnWriteDone(bool ok) override { watcher_->OnWriteDone(ok); }
-  void OnCancel() override {
-    if (watcher_ != nullptr) watcher_->OnCancel();
-  }
-  void OnDone() override {
-    if (watcher_ != nullptr) {
-      watcher_->OnDone();
-      registry_->Unwatch(table_id_, watcher_.get());
-    }
-    delete this;
-  }
-
- private:
-  TableRegistry* const registry_;
-  const std::string table_id_;
-  std::shared_ptr<Watcher> watcher_;
-};
-
-// Unary calls on the registry: the status, or the response.
-template <typename Response, typename Fn>
-grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* ctx, Response* response, Fn fn) {
-  auto* reactor = ctx->DefaultReactor();
-  absl::StatusOr<Response> result = fn();
-  if (result.ok()) *response = *std::move(result);
-  reactor->Finish(ToGrpcStatus(result.status()));
-  return reactor;
-}
 
 class BilliardsService final : public v1::Billiards::CallbackService {
  public:
@@ -187,7 +316,8 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   }
   grpc::ServerWriteReactor<v1::TableSnapshot>* WatchTable(
       grpc::CallbackServerContext*, const v1::WatchTableRequest* request) override {
-    return new WatchReactor(tables_, *request);
+    return new WatchReactor<TableRegistry, Watcher, v1::WatchTableRequest>(tables_, *request,
+                                                                           request->table_id());
   }
 
   grpc::ServerUnaryReactor* SimulateShot(grpc::CallbackServerContext* ctx,
@@ -238,7 +368,9 @@ v1::GetInfoResponse MakeServerInfo() {
 }
 
 std::unique_ptr<grpc::Service> MakeInfoService() { return std::make_unique<InfoService>(); }
-std::unique_ptr<grpc::Service> MakeSwingService() { return std::make_unique<SwingService>(); }
+std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions) {
+  return std::make_unique<SwingService>(sessions);
+}
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables) {
   return std::make_unique<BilliardsService>(tables);
 }

@@ -10,13 +10,15 @@
 
 namespace sportsim::server {
 
+class SessionRegistry;
 class TableRegistry;
 
 /// The capabilities this build serves (also used by tests).
 v1::GetInfoResponse MakeServerInfo();
 
 std::unique_ptr<grpc::Service> MakeInfoService();
-std::unique_ptr<grpc::Service> MakeSwingService();
+/// Swing: SimulateSwing, SimulateFlight and the sessions of `sessions` (which must outlive it).
+std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions);
 /// Billiards: SimulateShot and the tables of `tables` (which must outlive the service).
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables);
 

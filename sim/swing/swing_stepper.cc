@@ -125,6 +125,12 @@ double SwingStepper::SegmentEnd() const {
                                                : std::numeric_limits<double>::infinity();
 }
 
+void SwingStepper::ProgramChanged(const TorqueProgram* program) {
+  program_ = program;
+  segment_ = program_->SegmentAt(t_);
+  fsal_valid_ = false;
+}
+
 absl::Status SwingStepper::Step(double t_limit, StepRecord* record) {
   if (!(t_limit > t_)) {
     return absl::FailedPreconditionError(

@@ -82,6 +82,12 @@ class SwingStepper {
   /// turns an angle by more than max_turn_per_step_rad, dp45 step-size underflow.
   absl::Status Step(double t_limit, StepRecord* record);
 
+  /// For live input: the program (same object, or `program`) now holds different torques from
+  /// the current time on. Re-derives the segment at t() (right-continuous) and drops dp45's
+  /// first-same-as-last derivative. The program must not change before t(): records already
+  /// made are interpolated with the program in force when they are interpolated.
+  void ProgramChanged(const TorqueProgram* program);
+
   /// The state at time t in [record.t0, record.t1].
   SwingVec Interpolate(const StepRecord& record, double t);
 

@@ -4,11 +4,13 @@ import csv
 import io
 import json
 import os
+import select
 import signal
 import socket
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 import xml.etree.ElementTree as ET
 
@@ -364,6 +366,179 @@ class TablesAgainstServer(unittest.TestCase):
             root = ET.parse(path).getroot()
             self.assertEqual(root.tag, SVG_NS + "svg")
             self.assertGreaterEqual(len(root.findall(".//" + SVG_NS + "polyline")), 2)
+
+
+SAMPLE_KEYS = ("t_s", "theta_deg", "alpha_deg", "beta_deg", "phi_deg", "clubhead_speed_mps")
+# The chapter's torques as live input: Q_alpha 100 N m throughout, Q_beta -10 N m until 0.1 s.
+CHAPTER_DRIVE = "0,100,-10\n0.1,100,0\n"
+
+
+class SessionsAgainstServer(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.server = ServerProcess(SERVER)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.__exit__()
+
+    def cli_json(self, *args):
+        r = cli(self.server.address, "--format", "json", *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return json.loads(r.stdout)
+
+    def create(self, *args):
+        created = self.cli_json("swing", "create", *args)
+        self.assertTrue({"session_id", "token"} <= set(created), created)
+        return created["session_id"], created["token"]
+
+    def simulated_impact(self):
+        # The same golfer, club, integrator (rk4) and step (0.0025 s) as a default session.
+        return self.cli_json("swing", "simulate")["impact"]
+
+    def drive(self, session, token, stdin, *args):
+        return subprocess.run([CLI, "--server", self.server.address, "--format", "jsonl",
+                               "swing", "drive", session, "--token", token, *args],
+                              input=stdin, capture_output=True, text=True, timeout=10)
+
+    def start_watch(self, session, *args):
+        """A `swing watch` that is live before the swing starts: its first line is in, or the
+        server counts it. Returns the process and the lines read so far."""
+        watch = subprocess.Popen([CLI, "--server", self.server.address, "--format", "jsonl",
+                                  "swing", "watch", session, *args],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline:
+            ready, _, _ = select.select([watch.stdout], [], [], 0.05)
+            if ready:
+                return watch, [watch.stdout.readline()]
+            if self.cli_json("swing", "get", session)["watchers"] >= 1:
+                return watch, []
+        watch.kill()
+        self.fail("swing watch did not go live: %r" % watch.communicate()[1])
+
+    def test_create_start_watch_until_impact_matches_simulate(self):
+        session, token = self.create()
+        watch, first = self.start_watch(session, "--until-impact")
+        started = self.cli_json("swing", "start", session, "--token", token)
+        self.assertIsInstance(started["start_tick"], int)
+        try:
+            out, err = watch.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            watch.kill()
+            raise
+        self.assertEqual(watch.returncode, 0, err)
+        lines = [json.loads(line) for line in first + out.splitlines() if line.strip()]
+        self.assertGreater(len(lines), 10)  # every tick by default: ~117 in the swing
+        for line in lines:
+            for key in SAMPLE_KEYS:
+                self.assertIn(key, line)
+            self.assertIsInstance(line["tick"], int)
+        impacts = [line["impact"] for line in lines if "impact" in line]
+        self.assertEqual(len(impacts), 1)
+        self.assertIn("impact", lines[-1])  # --until-impact ends with the impact's line
+        swinging = [line["t_s"] for line in lines if line["phase"] == "SWING_PHASE_SWINGING"]
+        self.assertEqual(swinging, sorted(swinging))
+        # Bit for bit: JSON numbers are shortest round-trip text, so equal values are equal
+        # doubles.
+        self.assertEqual(impacts[0], self.simulated_impact())
+
+    def test_drive_from_stdin_matches_simulate(self):
+        session, token = self.create()
+        r = self.drive(session, token, CHAPTER_DRIVE)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertNotIn("refused", r.stderr)
+        lines = [json.loads(line) for line in r.stdout.splitlines()]
+        self.assertGreater(len(lines), 10)
+        impacts = [line["impact"] for line in lines if "impact" in line]
+        self.assertEqual(len(impacts), 1)
+        want = self.simulated_impact()
+        self.assertEqual(impacts[0], want)
+        info = self.cli_json("swing", "get", session)
+        self.assertEqual(info["phase"], "SWING_PHASE_FINISHED")
+        self.assertEqual(info["last_impact"], want)
+
+    def test_drive_reports_refused_commands(self):
+        session, token = self.create()
+        # Before the previous command (OUT_OF_RANGE), and not finite (INVALID_ARGUMENT): both
+        # refused and reported on stderr; the swing goes on with the chapter's torques.
+        r = self.drive(session, token, "# t_s,qalpha_nm,qbeta_nm\n" + CHAPTER_DRIVE +
+                       "\n0.05,100,0\n0.2,nan,0\n")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("refused: OUT_OF_RANGE", r.stderr)
+        self.assertIn("refused: INVALID_ARGUMENT", r.stderr)
+        lines = [json.loads(line) for line in r.stdout.splitlines()]
+        impacts = [line["impact"] for line in lines if "impact" in line]
+        self.assertEqual(impacts, [self.simulated_impact()])
+        # A malformed line is a usage error, before any call.
+        r = self.drive(session, token, "0,100\n")
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn("stdin line 1", r.stderr)
+
+    def test_errors_tokens_ids_and_realism(self):
+        session, token = self.create()
+        r = cli(self.server.address, "swing", "start", session, "--token", "wrong")
+        self.assertEqual(r.returncode, 7, r.stderr)  # PERMISSION_DENIED
+        self.assertIn("PERMISSION_DENIED", r.stderr)
+        r = self.drive(session, "wrong", CHAPTER_DRIVE)
+        self.assertEqual(r.returncode, 7, r.stderr)
+        r = cli(self.server.address, "swing", "delete", session, "--token", "wrong")
+        self.assertEqual(r.returncode, 7, r.stderr)
+        for args in (("get", "no-such-session"), ("watch", "no-such-session"),
+                     ("start", "no-such-session", "--token", token)):
+            r = cli(self.server.address, "swing", *args)
+            self.assertEqual(r.returncode, 5, r.stderr)  # NOT_FOUND
+            self.assertIn("NOT_FOUND", r.stderr)
+        # 1000 N m at the shoulder is beyond a human: refused, and nothing changed.
+        r = cli(self.server.address, "swing", "start", session, "--token", token, "--qalpha",
+                "1000")
+        self.assertEqual(r.returncode, 3, r.stderr)  # INVALID_ARGUMENT
+        self.assertIn("INVALID_ARGUMENT", r.stderr)
+        info = self.cli_json("swing", "get", session)
+        self.assertEqual(info["phase"], "SWING_PHASE_ADDRESS")
+        self.assertEqual(info["swings"], 0)
+        arcade, arcade_token = self.create("--profile", "arcade")
+        started = self.cli_json("swing", "start", arcade, "--token", arcade_token, "--qalpha",
+                                "1000")
+        self.assertEqual(started["swing_id"], 1)
+        r = cli(self.server.address, "swing", "create", "--profile", "heroic")
+        self.assertEqual(r.returncode, 64, r.stderr)
+
+    def test_list_reset_delete(self):
+        created = self.cli_json("swing", "create", "--seats", "2", "--tick-hz", "200")
+        session = created["session_id"]
+        self.assertEqual(len(created["seats"]), 2)
+        self.assertEqual(created["token"], created["seats"][0]["token"])
+        listed = self.cli_json("swing", "list")
+        self.assertIn(session, [s["session_id"] for s in listed["sessions"]])
+        self.cli_json("swing", "reset", session, "--token", created["token"], "--gamma", "120",
+                      "--beta0", "100")
+        info = self.cli_json("swing", "get", session)
+        self.assertEqual((info["gamma_deg"], info["beta0_deg"]), (120, 100))
+        self.assertEqual(info["phase"], "SWING_PHASE_ADDRESS")
+        self.cli_json("swing", "delete", session, "--token", created["seats"][1]["token"])
+        r = cli(self.server.address, "swing", "get", session)
+        self.assertEqual(r.returncode, 5, r.stderr)
+
+    def test_drive_csv_and_svg(self):
+        session, token = self.create()
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "swing.svg")
+            r = subprocess.run([CLI, "--server", self.server.address, "--format", "csv", "swing",
+                                "drive", session, "--token", token, "--svg", path],
+                               input=CHAPTER_DRIVE, capture_output=True, text=True, timeout=10)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            rows = list(csv.reader(io.StringIO(r.stdout)))
+            self.assertEqual(tuple(rows[0]), SAMPLE_KEYS)
+            self.assertGreater(len(rows), 10)
+            with open(path) as f:
+                self.assertIn("<svg", f.read())
+            root = ET.parse(path).getroot()
+            self.assertEqual(root.tag, SVG_NS + "svg")
+            rods = (root.findall(".//" + SVG_NS + "line") +
+                    root.findall(".//" + SVG_NS + "polyline"))
+            self.assertGreaterEqual(len(rods), 10)
+            self.assertIn("m/s over the ground", "".join(root.itertext()))  # the impact label
 
 
 class ServerLifecycle(unittest.TestCase):

@@ -11,6 +11,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "server/billiards_convert.h"
+#include "tests/server/fake_sink.h"
 #include "sim/billiards/referee.h"
 #include "sim/billiards/shot.h"
 
@@ -20,81 +21,7 @@ namespace {
 using ::testing::HasSubstr;
 namespace b = ::sportsim::billiards;
 
-// A sink that records what it is given. With a reader thread it completes each write after
-// `read_delay`; without one (stalled) it never does, like a client that stopped reading.
-class FakeSink : public SnapshotSink {
- public:
-  // Like the gRPC reactor's OnDone: the watcher forgets the sink before it goes.
-  ~FakeSink() override {
-    StopReading();
-    if (watcher_ != nullptr) watcher_->OnDone();
-  }
-  void Bind(std::shared_ptr<Watcher> w) { watcher_ = std::move(w); }
-  void SinkWrite(const v1::TableSnapshot* s) override {
-    absl::MutexLock lock(&mu_);
-    got_.push_back(*s);
-    arrival_.push_back(std::chrono::steady_clock::now());
-    in_flight_ = true;
-  }
-  void SinkWriteLast(const v1::TableSnapshot* s, const absl::Status& status) override {
-    absl::MutexLock lock(&mu_);
-    got_.push_back(*s);
-    arrival_.push_back(std::chrono::steady_clock::now());
-    finished_ = true;
-    status_ = status;
-  }
-  void SinkFinish(const absl::Status& status) override {
-    absl::MutexLock lock(&mu_);
-    finished_ = true;
-    status_ = status;
-  }
-  void StartReading(std::shared_ptr<Watcher> w, std::chrono::microseconds read_delay) {
-    watcher_ = std::move(w);
-    reader_ = std::thread([this, read_delay] {
-      while (!stop_) {
-        bool complete = false;
-        {
-          absl::MutexLock lock(&mu_);
-          complete = in_flight_;
-          in_flight_ = false;
-        }
-        if (complete) watcher_->OnWriteDone(true);
-        std::this_thread::sleep_for(read_delay);
-      }
-    });
-  }
-  void StopReading() {
-    stop_ = true;
-    if (reader_.joinable()) reader_.join();
-  }
-  std::vector<v1::TableSnapshot> got() const {
-    absl::MutexLock lock(&mu_);
-    return got_;
-  }
-  std::vector<std::chrono::steady_clock::time_point> arrivals() const {
-    absl::MutexLock lock(&mu_);
-    return arrival_;
-  }
-  bool finished() const {
-    absl::MutexLock lock(&mu_);
-    return finished_;
-  }
-  absl::Status status() const {
-    absl::MutexLock lock(&mu_);
-    return status_;
-  }
-
- private:
-  mutable absl::Mutex mu_;
-  std::vector<v1::TableSnapshot> got_;
-  std::vector<std::chrono::steady_clock::time_point> arrival_;
-  bool in_flight_ = false;
-  bool finished_ = false;
-  absl::Status status_;
-  std::shared_ptr<Watcher> watcher_;
-  std::thread reader_;
-  std::atomic<bool> stop_{false};
-};
+using FakeSink = FakeSinkFor<Watcher>;
 
 // A quick table: a 9-ball rack on heavy cloth so shots end within a second or two.
 v1::CreateTableRequest QuickTable(double tick_hz = 1000) {
