@@ -57,12 +57,15 @@ class WatchReactor final : public grpc::ServerWriteReactor<typename Watcher::Sna
   using Snapshot = typename Watcher::Snapshot;
   WatchReactor(Registry* registry, const Request& request, std::string id)
       : registry_(registry), id_(std::move(id)) {
-    absl::StatusOr<std::shared_ptr<Watcher>> watcher = registry->Watch(request, this);
+    // Registered without a sink: a tick worker may offer it a frame at once, and its write
+    // must not complete before watcher_ is set. Attach, then pump.
+    absl::StatusOr<std::shared_ptr<Watcher>> watcher = registry->Watch(request, nullptr);
     if (!watcher.ok()) {
       this->Finish(ToGrpcStatus(watcher.status()));
       return;
     }
     watcher_ = *std::move(watcher);
+    watcher_->Attach(this);
     watcher_->Pump();
   }
 
@@ -123,7 +126,9 @@ class DriveReactor final : public grpc::ServerBidiReactor<v1::DriveSwingRequest,
                             "DriveSwing: the first message must be `start`"));
         return;
       }
-      absl::StatusOr<std::shared_ptr<Drive>> started = registry_->StartDrive(request_.start(), this);
+      // Registered without a sink, as in WatchReactor: drive_ is set before any write starts.
+      absl::StatusOr<std::shared_ptr<Drive>> started =
+          registry_->StartDrive(request_.start(), nullptr);
       if (!started.ok()) {
         Finish(ToGrpcStatus(started.status()));
         return;
@@ -133,6 +138,7 @@ class DriveReactor final : public grpc::ServerBidiReactor<v1::DriveSwingRequest,
         absl::MutexLock lock(&mu_);
         drive_ = drive;
       }
+      drive->watcher->Attach(this);
       drive->watcher->Pump();
     } else if (request_.has_torque()) {
       registry_->Command(*drive, request_.torque());

@@ -119,7 +119,8 @@ class SessionRegistry {
   absl::StatusOr<v1::ResetSwingResponse> Reset(const v1::ResetSwingRequest& request);
 
   /// Spectators: registers a watcher writing to `sink` and queues its first snapshot; the
-  /// caller then Pump()s it. Errors change nothing.
+  /// caller then Pump()s it. With a null sink, the caller Attach()es one before pumping.
+  /// Errors change nothing.
   absl::StatusOr<std::shared_ptr<SwingWatcher>> Watch(const v1::WatchSwingRequest& request,
                                                       SwingSink* sink);
   /// Forgets a watcher whose stream is done.

@@ -120,7 +120,8 @@ class TableRegistry {
   absl::StatusOr<v1::SetTurnResponse> SetTurn(const v1::SetTurnRequest& request);
 
   /// Registers a watcher writing to `sink` and queues its first snapshot; the caller then calls
-  /// Pump() on it. Errors change nothing.
+  /// Pump() on it. With a null sink, the caller Attach()es one before pumping (nothing is
+  /// written until then). Errors change nothing.
   absl::StatusOr<std::shared_ptr<Watcher>> Watch(const v1::WatchTableRequest& request,
                                                  SnapshotSink* sink);
   /// Forgets a watcher whose stream is done.
