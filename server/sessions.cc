@@ -89,6 +89,7 @@ struct SwingRun {
   int64_t start_tick = 0;  // the session tick at which the swing's time is 0
   uint32_t seat = 0;
   std::optional<sw::SwingSample> impact;
+  bool impact_reported = false;
   std::deque<PendingCommand> pending;     // driven: in time order
   std::shared_ptr<SwingWatcher> driver;   // driven: the driver's stream, while it lasts
   double qalpha = 0, qbeta = 0;           // driven: the torques in force
@@ -393,14 +394,18 @@ absl::Status SessionRegistry::Delete(const v1::DeleteSessionRequest& request) {
   {
     absl::MutexLock lock(&session->mu);
     session->deleted = true;
+    std::vector<SwingEventPtr> fresh;
     if (session->run != nullptr) {
+      ++session->sequence;
+      std::shared_ptr<SwingWatcher> driver;  // closed below with the others
+      EndSwing(*session, "deleted", limits_.event_log, &fresh, &driver);
       swinging_.fetch_sub(1);
-      session->run.reset();
     }
     const auto last = session->MakeFrame(session->NowTick(), false);
     const absl::Status gone = absl::NotFoundError(
         absl::StrFormat("session_id: session %s was deleted", session->id));
     for (const std::shared_ptr<SwingWatcher>& w : session->watchers) {
+      w->Offer(nullptr, fresh);  // the ENDED event rides with the last snapshot
       if (w->Close(gone, last)) pump.push_back(w);
     }
   }
@@ -708,6 +713,7 @@ absl::StatusOr<std::shared_ptr<Drive>> SessionRegistry::StartDrive(const v1::Dri
   auto watcher = std::make_shared<SwingWatcher>(s.id, SwingWatchOptions{}, interval_ticks,
                                                 limits_.watcher_backlog, counters_);
   watcher->Attach(sink);
+  std::vector<std::shared_ptr<SwingWatcher>> pump;
   auto drive = std::make_shared<Drive>();
   drive->session = ptr;
   drive->watcher = watcher;
@@ -739,20 +745,21 @@ absl::StatusOr<std::shared_ptr<Drive>> SessionRegistry::StartDrive(const v1::Dri
     swinging_.fetch_add(1);
     events_.fetch_add(static_cast<int64_t>(fresh.size()));
     watcher->Due(s.tick);
-    std::vector<std::shared_ptr<SwingWatcher>> pump;
     s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
     Schedule(s, s.clock.Deadline(s.tick + 1));
     drive->swing_id = s.swings;
     drive->seat = *seat;
-    // The others are pumped here; the caller pumps its own stream once it is ready.
-    for (const auto& w : pump) {
-      if (w != watcher) w->Pump();
-    }
+  }
+  // The others are pumped here, with no lock held; the caller pumps its own stream once it is
+  // ready.
+  for (const auto& w : pump) {
+    if (w != watcher) w->Pump();
   }
   return drive;
 }
 
-void SessionRegistry::Refuse(Drive& drive, const absl::Status& why) {
+void SessionRegistry::Refuse(Drive& drive, const absl::Status& why,
+                             const v1::TorqueCommand* command) {
   Session& s = *drive.session;
   bool pump = false;
   {
@@ -764,6 +771,11 @@ void SessionRegistry::Refuse(Drive& drive, const absl::Status& why) {
     e.set_code(static_cast<int32_t>(why.code()));
     e.set_reason(std::string(why.message()));
     e.set_seat(static_cast<uint32_t>(drive.seat));
+    if (command != nullptr) {
+      e.set_command_t_s(command->t_s());
+      e.set_qalpha_nm(command->qalpha_nm());
+      e.set_qbeta_nm(command->qbeta_nm());
+    }
     refused_.fetch_add(1);
     pump = drive.watcher->Offer(nullptr, {std::make_shared<const v1::SwingEvent>(std::move(e))});
   }
@@ -846,7 +858,7 @@ void SessionRegistry::Command(Drive& drive, const v1::TorqueCommand& c) {
     }
   }
   // Refused: reported on the driver's stream; nothing else changes.
-  Refuse(drive, refused);
+  Refuse(drive, refused, &c);
 }
 
 void SessionRegistry::EndDrive(Drive& drive, bool half_closed) {
@@ -898,6 +910,21 @@ std::optional<std::string> AdvanceSwing(Session& s, int64_t k, std::vector<v1::S
   }
   std::optional<std::string> ended;
   bool at_impact = false;
+  // An impact is reported at the first tick at or after its time (a step may carry past the
+  // tick it was taken for: dp45, or a step that does not divide the tick period).
+  const auto report_impact = [&] {
+    v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_IMPACT, r.impact->t_s, s.swings, k);
+    ImpactToProto(*r.impact, e.mutable_impact());
+    e.set_seat(r.seat);
+    out->push_back(std::move(e));
+    r.impact_reported = true;
+    s.last_impact = r.impact;
+    if (r.stop == sw::SwingStop::kImpact) {
+      ended = "impact";
+      at_impact = true;
+    }
+  };
+  if (r.impact && !r.impact_reported && r.impact->t_s <= tau + snap) report_impact();
   const double limit = r.driven ? std::min(tau, r.duration_s) : r.duration_s;
   while (!ended && stepper.t() < tau - snap && stepper.t() < r.duration_s) {
     if (absl::Status st = stepper.Step(limit, &r.record); !st.ok()) {
@@ -915,20 +942,14 @@ std::optional<std::string> AdvanceSwing(Session& s, int64_t k, std::vector<v1::S
     if (!r.impact) {
       if (auto hit = sw::FindImpactInStep(stepper, r.record)) {
         r.impact = sw::MakeSample(r.model, hit->first, hit->second);
-        v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_IMPACT, hit->first, s.swings, k);
-        ImpactToProto(*r.impact, e.mutable_impact());
-        e.set_seat(r.seat);
-        out->push_back(std::move(e));
-        s.last_impact = r.impact;
-        if (r.stop == sw::SwingStop::kImpact) {
-          ended = "impact";
-          at_impact = true;
-          break;
-        }
+        if (hit->first <= tau + snap) report_impact();
+        // Stopping at impact, SimulateSwing takes no step after this one; neither do we.
+        if (r.stop == sw::SwingStop::kImpact) break;
       }
     }
-    if (stepper.t() >= r.duration_s) ended = "duration";
   }
+  // The duration's end, at the first tick at or after it.
+  if (!ended && stepper.t() >= r.duration_s && r.duration_s <= tau + snap) ended = "duration";
   if (at_impact) {
     s.state = *r.impact;
   } else if (ended && ended->rfind("error", 0) == 0) {

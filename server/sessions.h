@@ -132,8 +132,9 @@ class SessionRegistry {
   /// A torque command from the driver: queued for its tick, or refused with a COMMAND_REFUSED
   /// event on the driver's stream (never an error: the stream goes on).
   void Command(Drive& drive, const v1::TorqueCommand& command);
-  /// A command message that is not a torque (a second start): refused on the driver's stream.
-  void Refuse(Drive& drive, const absl::Status& why);
+  /// Reports a refused command (or a message that is not a torque command, with `command`
+  /// null) on the driver's stream as COMMAND_REFUSED. Nothing else changes.
+  void Refuse(Drive& drive, const absl::Status& why, const v1::TorqueCommand* command = nullptr);
   /// The driver half-closed (`half_closed`: the stream ends OK after a last snapshot) or went
   /// away. The swing goes on with the torques in force. Idempotent.
   void EndDrive(Drive& drive, bool half_closed);
