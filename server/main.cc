@@ -4,7 +4,9 @@
 
 #include <cstdio>
 #include <iostream>
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
@@ -22,6 +24,9 @@ ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(3),
 ABSL_FLAG(int, max_request_bytes, 64 << 10, "Largest request message accepted (bytes)");
 ABSL_FLAG(int, max_tables, 2000, "Most tables the server holds at once");
 ABSL_FLAG(int, max_watchers_per_table, 64, "Most WatchTable streams per table");
+ABSL_FLAG(std::string, metrics_listen, "",
+          "HOST:PORT of a Prometheus /metrics endpoint (e.g. 127.0.0.1:9464; port 0: any free "
+          "port, printed at start); off when empty");
 ABSL_FLAG(int, max_sessions, 2000, "Most swing sessions the server holds at once");
 ABSL_FLAG(int, max_watchers_per_session, 64,
           "Most WatchSwing and DriveSwing streams per swing session");
@@ -38,7 +43,22 @@ int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
       "sportsim-server [--listen=HOST:PORT] [--port=N]: serves sportsim.v1 (Server, Swing, Billiards), "
       "gRPC health and reflection. Stops cleanly on SIGINT or SIGTERM. --helpfull lists flags.");
-  absl::ParseCommandLine(argc, argv);
+  // absl flag names cannot contain '-': accept --metrics-listen for --metrics_listen (the name
+  // before any '=' only).
+  std::vector<std::string> args(argv, argv + argc);
+  for (size_t i = 1; i < args.size(); ++i) {
+    std::string& a = args[i];
+    if (a == "--") break;
+    if (a.size() > 2 && a[0] == '-' && a[1] == '-') {
+      const size_t end = std::min(a.find('='), a.size());
+      for (size_t j = 2; j < end; ++j) {
+        if (a[j] == '-') a[j] = '_';
+      }
+    }
+  }
+  std::vector<char*> arg_ptrs;
+  for (std::string& a : args) arg_ptrs.push_back(a.data());
+  absl::ParseCommandLine(static_cast<int>(arg_ptrs.size()), arg_ptrs.data());
 
   // Block the stop signals in every thread (gRPC's threads inherit this mask); main waits.
   sigset_t stop_signals;
@@ -49,6 +69,7 @@ int main(int argc, char** argv) {
 
   sportsim::server::ServerConfig config;
   config.listen = absl::GetFlag(FLAGS_listen);
+  config.metrics_listen = absl::GetFlag(FLAGS_metrics_listen);
   config.max_receive_message_bytes = absl::GetFlag(FLAGS_max_request_bytes);
   config.tables.max_tables = absl::GetFlag(FLAGS_max_tables);
   config.tables.max_watchers_per_table = absl::GetFlag(FLAGS_max_watchers_per_table);
@@ -96,6 +117,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::cout << "sportsim-server listening on " << (*app)->address() << std::endl;
+  if ((*app)->metrics_port() != 0) {
+    std::cout << "sportsim-server metrics on port " << (*app)->metrics_port() << " (/metrics)"
+              << std::endl;
+  }
 
   int sig = 0;
   sigwait(&stop_signals, &sig);

@@ -64,7 +64,9 @@ void TickScheduler::Loop() {
     }
     timespec c0{}, c1{};
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
-    wake.target->Wake(wake.generation, std::chrono::steady_clock::now());
+    const auto w0 = std::chrono::steady_clock::now();
+    wake.target->Wake(wake.generation, w0);
+    wake_durations_.Add(std::chrono::steady_clock::now() - w0);
     clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
     cpu_ns_.fetch_add((c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec),
                       std::memory_order_relaxed);

@@ -15,6 +15,7 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
+#include "server/watcher.h"
 
 namespace sportsim::server {
 
@@ -44,6 +45,8 @@ class TickScheduler {
   /// Thread CPU time the workers spent in Wake calls (ns).
   int64_t cpu_ns() const { return cpu_ns_.load(std::memory_order_relaxed); }
   int workers() const { return static_cast<int>(threads_.size()); }
+  /// Wall time of each Wake call: one tick (or heartbeat) of one world.
+  const LatencyHistogram& wake_durations() const { return wake_durations_; }
 
  private:
   struct Pending {
@@ -60,6 +63,7 @@ class TickScheduler {
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
   std::vector<std::thread> threads_;
   std::atomic<int64_t> cpu_ns_{0};
+  LatencyHistogram wake_durations_;
 };
 
 }  // namespace sportsim::server

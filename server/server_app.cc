@@ -106,7 +106,21 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->services_.push_back(MakeSwingService(app->sessions_.get()));
   app->services_.push_back(MakeBilliardsService(app->tables_.get()));
 
+  app->rpc_counters_ = std::make_unique<RpcCounters>();
+  if (!config.metrics_listen.empty()) {
+    absl::StatusOr<std::unique_ptr<MetricsEndpoint>> metrics =
+        MetricsEndpoint::Start(config.metrics_listen, app->tables_.get(), app->sessions_.get(),
+                               app->scheduler_.get(), app->rpc_counters_.get());
+    if (!metrics.ok()) return metrics.status();
+    app->metrics_ = *std::move(metrics);
+  }
+
   grpc::ServerBuilder builder;
+  {
+    std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> creators;
+    creators.push_back(MakeRpcCountingInterceptor(app->rpc_counters_.get()));
+    builder.experimental().SetInterceptorCreators(std::move(creators));
+  }
   // Without this, gRPC sets SO_REUSEPORT and a second server would share a busy port silently.
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.SetMaxReceiveMessageSize(config.max_receive_message_bytes);
@@ -130,6 +144,8 @@ ServerApp::~ServerApp() {
   // No wake may reach a registry being destroyed.
   if (scheduler_ != nullptr) scheduler_->Stop();
 }
+
+int ServerApp::metrics_port() const { return metrics_ != nullptr ? metrics_->port() : 0; }
 
 std::string ServerApp::address() const {
   return host_.find(':') != std::string::npos ? absl::StrCat("[", host_, "]:", port_)

@@ -10,6 +10,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
+#include "server/metrics.h"
 #include "server/sessions.h"
 #include "server/tables.h"
 
@@ -24,6 +25,7 @@ struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  ///< host:port ([v6]:port); port 0 = any free port
   int max_receive_message_bytes = 64 << 10;  ///< requests are small: 64 KiB (--max_request_bytes)
   int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
+  std::string metrics_listen;  ///< host:port of the Prometheus /metrics endpoint; "" = off
   int tick_workers = 0;  ///< threads ticking every table and session; 0: one per core
   TableLimits tables;
   SessionLimits sessions;
@@ -47,6 +49,8 @@ class ServerApp {
   ~ServerApp();
 
   int port() const { return port_; }
+  /// The /metrics port, or 0 when metrics are off.
+  int metrics_port() const;
   TableRegistry& tables() { return *tables_; }
   SessionRegistry& sessions() { return *sessions_; }
   std::string address() const;
@@ -63,6 +67,8 @@ class ServerApp {
   std::unique_ptr<TickScheduler> scheduler_;  // stopped before the registries go
   std::unique_ptr<TableRegistry> tables_;  // the registries outlive the services
   std::unique_ptr<SessionRegistry> sessions_;
+  std::unique_ptr<RpcCounters> rpc_counters_;   // outlives the gRPC server (its interceptor)
+  std::unique_ptr<MetricsEndpoint> metrics_;    // goes before the registries it reads
   std::vector<std::unique_ptr<grpc::Service>> services_;
   std::unique_ptr<grpc::Server> server_;
   std::string host_;

@@ -777,6 +777,7 @@ void SessionRegistry::Refuse(Drive& drive, const absl::Status& why,
       e.set_qbeta_nm(command->qbeta_nm());
     }
     refused_.fetch_add(1);
+    refused_by_code_[std::clamp(static_cast<int>(why.code()), 0, 16)].fetch_add(1);
     pump = drive.watcher->Offer(nullptr, {std::make_shared<const v1::SwingEvent>(std::move(e))});
   }
   if (pump) drive.watcher->Pump();
@@ -1081,6 +1082,7 @@ SessionStats SessionRegistry::stats() const {
   st.events = events_.load();
   st.commands = commands_.load();
   st.commands_refused = refused_.load();
+  for (size_t i = 0; i < st.refused_by_code.size(); ++i) st.refused_by_code[i] = refused_by_code_[i].load();
   st.swinging = swinging_.load();
   std::vector<std::shared_ptr<Session>> sessions;
   {

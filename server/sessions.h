@@ -16,6 +16,7 @@
 #ifndef SPORTSIM_SERVER_SESSIONS_H_
 #define SPORTSIM_SERVER_SESSIONS_H_
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <map>
@@ -55,6 +56,7 @@ struct SessionStats {
   int64_t events = 0;
   int64_t commands = 0;          ///< torque commands applied
   int64_t commands_refused = 0;  ///< late, non-finite, out of range or out of order
+  std::array<int64_t, 17> refused_by_code{};  ///< the same, by google.rpc code
   int sessions = 0;
   int swinging = 0;
   int watchers = 0;
@@ -143,6 +145,7 @@ class SessionRegistry {
   void Shutdown(const absl::Status& status);
 
   SessionStats stats() const;
+  const LatencyHistogram& publish_to_write() const { return counters_->publish_to_write; }
 
  private:
   friend struct Session;
@@ -161,6 +164,7 @@ class SessionRegistry {
   std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0}, commands_{0},
       refused_{0};
   std::atomic<int> swinging_{0};
+  std::array<std::atomic<int64_t>, 17> refused_by_code_{};
 };
 
 }  // namespace sportsim::server

@@ -12,6 +12,7 @@ void LatencyHistogram::Add(std::chrono::nanoseconds d) {
   const double us = std::max(1.0, static_cast<double>(d.count()) * 1e-3);
   const int i = std::clamp(static_cast<int>(4.0 * std::log2(us)), 0, kBuckets - 1);
   counts_[i].fetch_add(1, std::memory_order_relaxed);
+  sum_ns_.fetch_add(d.count(), std::memory_order_relaxed);
 }
 
 std::vector<int64_t> LatencyHistogram::Counts() const {

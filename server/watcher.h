@@ -59,9 +59,12 @@ class LatencyHistogram {
   /// The upper edge of bucket i (seconds).
   static double UpperEdge(int i);
   std::vector<int64_t> Counts() const;
+  /// The sum of what was added (seconds), for Prometheus' _sum.
+  double Sum() const { return static_cast<double>(sum_ns_.load(std::memory_order_relaxed)) * 1e-9; }
 
  private:
   std::array<std::atomic<int64_t>, kBuckets> counts_{};
+  std::atomic<int64_t> sum_ns_{0};
 };
 
 /// Totals over every watcher of a registry.

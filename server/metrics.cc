@@ -1,0 +1,268 @@
+#include "server/metrics.h"
+
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/support/server_interceptor.h>
+#include <prometheus/collectable.h>
+#include <prometheus/exposer.h>
+#include <prometheus/metric_family.h>
+
+#include <exception>
+#include <vector>
+
+#include "absl/strings/str_format.h"
+#include "server/scheduler.h"
+#include "server/sessions.h"
+#include "server/tables.h"
+#include "server/world.h"
+
+namespace sportsim::server {
+
+// ---------------------------------------------------------------------------------------------
+// RPC counting
+
+void RpcCounters::Count(const std::string& method, int code) {
+  absl::MutexLock lock(&mu_);
+  ++counts_[{method, code}];
+}
+
+std::map<std::pair<std::string, int>, int64_t> RpcCounters::Snapshot() const {
+  absl::MutexLock lock(&mu_);
+  return counts_;
+}
+
+namespace {
+
+class CountingInterceptor final : public grpc::experimental::Interceptor {
+ public:
+  CountingInterceptor(RpcCounters* counters, const char* method)
+      : counters_(counters), method_(method != nullptr ? method : "unknown") {}
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_STATUS)) {
+      counters_->Count(method_, static_cast<int>(methods->GetSendStatus().error_code()));
+    }
+    methods->Proceed();
+  }
+
+ private:
+  RpcCounters* const counters_;
+  const std::string method_;
+};
+
+class CountingFactory final : public grpc::experimental::ServerInterceptorFactoryInterface {
+ public:
+  explicit CountingFactory(RpcCounters* counters) : counters_(counters) {}
+  grpc::experimental::Interceptor* CreateServerInterceptor(
+      grpc::experimental::ServerRpcInfo* info) override {
+    return new CountingInterceptor(counters_, info->method());
+  }
+
+ private:
+  RpcCounters* const counters_;
+};
+
+const char* CodeName(int code) {
+  static constexpr const char* kNames[] = {
+      "OK",        "CANCELLED",          "UNKNOWN",        "INVALID_ARGUMENT",
+      "DEADLINE_EXCEEDED", "NOT_FOUND",  "ALREADY_EXISTS", "PERMISSION_DENIED",
+      "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE",
+      "UNIMPLEMENTED", "INTERNAL", "UNAVAILABLE", "DATA_LOSS", "UNAUTHENTICATED"};
+  return code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
+}
+
+// Codes that mean the caller's input was refused (not a server fault, not a cancellation).
+bool IsRejection(int code) {
+  switch (static_cast<grpc::StatusCode>(code)) {
+    case grpc::StatusCode::INVALID_ARGUMENT:
+    case grpc::StatusCode::NOT_FOUND:
+    case grpc::StatusCode::PERMISSION_DENIED:
+    case grpc::StatusCode::RESOURCE_EXHAUSTED:
+    case grpc::StatusCode::FAILED_PRECONDITION:
+    case grpc::StatusCode::OUT_OF_RANGE:
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return true;
+    default:
+      return false;
+  }
+}
+
+using prometheus::ClientMetric;
+using prometheus::MetricFamily;
+using prometheus::MetricType;
+
+MetricFamily Family(std::string name, std::string help, MetricType type) {
+  MetricFamily f;
+  f.name = std::move(name);
+  f.help = std::move(help);
+  f.type = type;
+  return f;
+}
+
+void Add(MetricFamily* f, double value, std::vector<ClientMetric::Label> labels = {}) {
+  ClientMetric m;
+  m.label = std::move(labels);
+  if (f->type == MetricType::Counter) {
+    m.counter.value = value;
+  } else {
+    m.gauge.value = value;
+  }
+  f->metric.push_back(std::move(m));
+}
+
+// A LatencyHistogram as a Prometheus histogram, with one bucket per power of two of
+// microseconds (every fourth of its 128 buckets), 1 us to about 1 h.
+void AddHistogram(MetricFamily* f, const LatencyHistogram& h,
+                  std::vector<ClientMetric::Label> labels = {}) {
+  ClientMetric m;
+  m.label = std::move(labels);
+  const std::vector<int64_t> counts = h.Counts();
+  uint64_t cumulative = 0;
+  for (int i = 0; i < LatencyHistogram::kBuckets; ++i) {
+    cumulative += static_cast<uint64_t>(counts[static_cast<size_t>(i)]);
+    if (i % 4 == 3 && i < 4 * 32) {
+      m.histogram.bucket.push_back({cumulative, LatencyHistogram::UpperEdge(i)});
+    }
+  }
+  m.histogram.bucket.push_back({cumulative, std::numeric_limits<double>::infinity()});
+  m.histogram.sample_count = cumulative;
+  m.histogram.sample_sum = h.Sum();
+  f->metric.push_back(std::move(m));
+}
+
+class Collector final : public prometheus::Collectable {
+ public:
+  Collector(TableRegistry* tables, SessionRegistry* sessions, TickScheduler* scheduler,
+            RpcCounters* rpcs)
+      : tables_(tables), sessions_(sessions), scheduler_(scheduler), rpcs_(rpcs) {}
+
+  std::vector<MetricFamily> Collect() const override {
+    const TableStats t = tables_->stats();
+    const SessionStats s = sessions_->stats();
+    const std::vector<ClientMetric::Label> table{{"world", "table"}};
+    const std::vector<ClientMetric::Label> session{{"world", "session"}};
+    std::vector<MetricFamily> out;
+    const auto per_world = [&](const char* name, const char* help, MetricType type, double tv,
+                               double sv) {
+      MetricFamily f = Family(name, help, type);
+      Add(&f, tv, table);
+      Add(&f, sv, session);
+      out.push_back(std::move(f));
+    };
+    {
+      MetricFamily f = Family("sportsim_tick_duration_seconds",
+                              "Wall time of one wake of one world on a tick worker (a tick, "
+                              "catch-up ticks, or a heartbeat)",
+                              MetricType::Histogram);
+      AddHistogram(&f, scheduler_->wake_durations());
+      out.push_back(std::move(f));
+    }
+    {
+      MetricFamily f = Family("sportsim_tick_worker_cpu_seconds_total",
+                              "Thread CPU time the tick workers spent", MetricType::Counter);
+      Add(&f, static_cast<double>(scheduler_->cpu_ns()) * 1e-9);
+      out.push_back(std::move(f));
+    }
+    per_world("sportsim_ticks_total", "World ticks advanced", MetricType::Counter,
+              static_cast<double>(t.ticks), static_cast<double>(s.ticks));
+    per_world("sportsim_late_ticks_total",
+              "Ticks advanced more than one period after their deadline", MetricType::Counter,
+              static_cast<double>(t.late_ticks), static_cast<double>(s.late_ticks));
+    per_world("sportsim_slipped_ticks_total",
+              "Ticks skipped by slipping a world's clock (too far behind to catch up)",
+              MetricType::Counter, static_cast<double>(t.slipped_ticks),
+              static_cast<double>(s.slipped_ticks));
+    per_world("sportsim_worlds", "Tables and swing sessions held", MetricType::Gauge, t.tables,
+              s.sessions);
+    per_world("sportsim_worlds_active", "Tables with moving balls, sessions mid-swing",
+              MetricType::Gauge, t.moving, s.swinging);
+    per_world("sportsim_watchers", "Open snapshot streams (WatchTable, WatchSwing, DriveSwing)",
+              MetricType::Gauge, t.watchers, s.watchers);
+    per_world("sportsim_snapshots_sent_total", "Snapshots written to streams",
+              MetricType::Counter, static_cast<double>(t.snapshots_sent),
+              static_cast<double>(s.snapshots_sent));
+    per_world("sportsim_snapshots_replaced_total",
+              "Snapshots overtaken by a newer one before a slow reader took them (latest wins)",
+              MetricType::Counter, static_cast<double>(t.snapshots_replaced),
+              static_cast<double>(s.snapshots_replaced));
+    per_world("sportsim_resyncs_total",
+              "Readers that fell more than --watcher_backlog events behind (sent the full state)",
+              MetricType::Counter, static_cast<double>(t.resyncs),
+              static_cast<double>(s.resyncs));
+    per_world("sportsim_events_total", "World events queued to readers (shots, collisions, "
+              "impacts, torques...)",
+              MetricType::Counter, static_cast<double>(t.events), static_cast<double>(s.events));
+    {
+      MetricFamily f = Family("sportsim_publish_to_write_seconds",
+                              "From a tick's deadline to the start of its snapshot's write",
+                              MetricType::Histogram);
+      AddHistogram(&f, tables_->publish_to_write(), table);
+      AddHistogram(&f, sessions_->publish_to_write(), session);
+      out.push_back(std::move(f));
+    }
+    {
+      MetricFamily f = Family("sportsim_swing_commands_total",
+                              "DriveSwing torque commands applied", MetricType::Counter);
+      Add(&f, static_cast<double>(s.commands));
+      out.push_back(std::move(f));
+    }
+    // Rejected inputs: RPCs ending with a caller-error code, and refused DriveSwing commands.
+    std::map<int, int64_t> rejected;
+    MetricFamily rpcs = Family("sportsim_rpcs_total", "RPCs finished, by method and status code",
+                               MetricType::Counter);
+    for (const auto& [key, n] : rpcs_->Snapshot()) {
+      Add(&rpcs, static_cast<double>(n), {{"method", key.first}, {"code", CodeName(key.second)}});
+      if (IsRejection(key.second)) rejected[key.second] += n;
+    }
+    for (int c = 0; c < 17; ++c) {
+      if (s.refused_by_code[static_cast<size_t>(c)] > 0) {
+        rejected[c] += s.refused_by_code[static_cast<size_t>(c)];
+      }
+    }
+    out.push_back(std::move(rpcs));
+    MetricFamily rej = Family("sportsim_rejected_inputs_total",
+                              "Requests and stream commands refused, by status code (bad input, "
+                              "unknown ids, wrong tokens, limits, late commands)",
+                              MetricType::Counter);
+    for (const auto& [code, n] : rejected) {
+      Add(&rej, static_cast<double>(n), {{"code", CodeName(code)}});
+    }
+    out.push_back(std::move(rej));
+    return out;
+  }
+
+ private:
+  TableRegistry* const tables_;
+  SessionRegistry* const sessions_;
+  TickScheduler* const scheduler_;
+  RpcCounters* const rpcs_;
+};
+
+}  // namespace
+
+std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface> MakeRpcCountingInterceptor(
+    RpcCounters* counters) {
+  return std::make_unique<CountingFactory>(counters);
+}
+
+absl::StatusOr<std::unique_ptr<MetricsEndpoint>> MetricsEndpoint::Start(
+    const std::string& listen, TableRegistry* tables, SessionRegistry* sessions,
+    TickScheduler* scheduler, RpcCounters* rpcs) {
+  std::unique_ptr<MetricsEndpoint> e(new MetricsEndpoint());
+  auto collector = std::make_shared<Collector>(tables, sessions, scheduler, rpcs);
+  try {
+    // One civetweb thread: a scrape every few seconds needs no more.
+    e->exposer_ = std::make_unique<prometheus::Exposer>(listen, /*num_threads=*/1);
+  } catch (const std::exception& ex) {
+    return absl::UnavailableError(
+        absl::StrFormat("--metrics_listen: cannot listen on %s: %s", listen, ex.what()));
+  }
+  e->exposer_->RegisterCollectable(collector);
+  const std::vector<int> ports = e->exposer_->GetListeningPorts();
+  e->port_ = ports.empty() ? 0 : ports.front();
+  e->collectable_ = collector;
+  return e;
+}
+
+MetricsEndpoint::~MetricsEndpoint() = default;
+
+}  // namespace sportsim::server
