@@ -124,7 +124,8 @@ struct Session : Ticked, std::enable_shared_from_this<Session> {
   uint64_t swings ABSL_GUARDED_BY(mu) = 0;  // also the id of the current or last swing
   std::unique_ptr<SwingRun> run ABSL_GUARDED_BY(mu);
   sw::SwingSample state ABSL_GUARDED_BY(mu);  // at the last tick advanced
-  double qalpha = 0, qbeta = 0;                // in force at `state`
+  double qalpha ABSL_GUARDED_BY(mu) = 0;  // in force at `state`
+  double qbeta ABSL_GUARDED_BY(mu) = 0;
   std::optional<sw::SwingSample> last_impact ABSL_GUARDED_BY(mu);
   std::string last_end_reason ABSL_GUARDED_BY(mu);
   std::deque<SwingEventPtr> log ABSL_GUARDED_BY(mu);
@@ -350,24 +351,43 @@ absl::StatusOr<v1::ListSessionsResponse> SessionRegistry::List(
   return response;
 }
 
-namespace {
-
 // Ends the swing in progress: phase FINISHED, an ENDED event, and the driver's stream closed
-// after the frame the caller offers next (or the last one given here).
-void EndSwing(Session& s, const std::string& reason, int event_log, std::vector<SwingEventPtr>* fresh,
-              std::shared_ptr<SwingWatcher>* driver) ABSL_EXCLUSIVE_LOCKS_REQUIRED(s.mu) {
+// after the frame the caller offers next. Commands still waiting for their tick are refused on
+// the driver's stream (FAILED_PRECONDITION), so a client that sent its schedule ahead learns
+// which ones never took effect.
+void SessionRegistry::EndSwing(Session& s, const std::string& reason,
+                               std::vector<SwingEventPtr>* fresh,
+                               std::shared_ptr<SwingWatcher>* driver) {
   SwingRun& r = *s.run;
+  if (r.driver != nullptr && !r.pending.empty()) {
+    std::vector<SwingEventPtr> leftovers;
+    for (const PendingCommand& c : r.pending) {
+      v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_COMMAND_REFUSED, s.state.t_s, s.swings, s.tick);
+      e.set_sequence(s.sequence);
+      e.set_command(c.index);
+      e.set_command_t_s(c.t_s);
+      e.set_qalpha_nm(c.qalpha);
+      e.set_qbeta_nm(c.qbeta);
+      e.set_seat(r.seat);
+      e.set_code(static_cast<int32_t>(absl::StatusCode::kFailedPrecondition));
+      e.set_reason(absl::StrFormat("command %d: the swing ended (%s) before its tick", c.index,
+                                   reason));
+      leftovers.push_back(std::make_shared<const v1::SwingEvent>(std::move(e)));
+      refused_.fetch_add(1);
+      refused_by_code_[static_cast<size_t>(absl::StatusCode::kFailedPrecondition)].fetch_add(1);
+    }
+    r.driver->Offer(nullptr, leftovers);  // they ride with the last frame, before ENDED
+  }
   v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_ENDED, s.state.t_s, s.swings, s.tick);
   e.set_reason(reason);
   e.set_seat(r.seat);
-  fresh->push_back(s.Log(std::move(e), event_log));
+  fresh->push_back(s.Log(std::move(e), limits_.event_log));
   s.last_end_reason = reason;
   s.phase = v1::SWING_PHASE_FINISHED;
   *driver = std::move(r.driver);
   s.run.reset();
+  swinging_.fetch_sub(1);
 }
-
-}  // namespace
 
 absl::Status SessionRegistry::Delete(const v1::DeleteSessionRequest& request) {
   if (absl::Status s = CheckSessionId(request.session_id()); !s.ok()) return s;
@@ -398,8 +418,7 @@ absl::Status SessionRegistry::Delete(const v1::DeleteSessionRequest& request) {
     if (session->run != nullptr) {
       ++session->sequence;
       std::shared_ptr<SwingWatcher> driver;  // closed below with the others
-      EndSwing(*session, "deleted", limits_.event_log, &fresh, &driver);
-      swinging_.fetch_sub(1);
+      EndSwing(*session, "deleted", &fresh, &driver);
     }
     const auto last = session->MakeFrame(session->NowTick(), false);
     const absl::Status gone = absl::NotFoundError(
@@ -591,8 +610,7 @@ absl::StatusOr<v1::ResetSwingResponse> SessionRegistry::Reset(const v1::ResetSwi
     std::vector<SwingEventPtr> fresh;
     std::shared_ptr<SwingWatcher> driver;
     if (s.run != nullptr) {
-      EndSwing(s, "reset", limits_.event_log, &fresh, &driver);
-      swinging_.fetch_sub(1);
+      EndSwing(s, "reset", &fresh, &driver);
     }
     s.params = params;
     s.model = std::make_shared<const sw::SwingModel>(*model);
@@ -837,8 +855,16 @@ void SessionRegistry::Command(Drive& drive, const v1::TorqueCommand& c) {
       // advanced (swing tick `done`) is known, what follows it is not.
       int64_t n = static_cast<int64_t>(std::ceil(c.t_s() * s.tick_hz - kSnapTicks));
       const int64_t done = s.tick - r->start_tick;
+      // The swing ends at the first tick at or after its duration; a command from there on
+      // would never act.
+      const int64_t last =
+          static_cast<int64_t>(std::ceil(r->duration_s * s.tick_hz - kSnapTicks)) - 1;
       bool late = false;
-      if (n < done) {
+      if (n > last) {
+        refuse(absl::OutOfRangeError(absl::StrFormat(
+            "command %d: t_s %g s is at or after the swing's last tick (duration %g s)", index,
+            c.t_s(), r->duration_s)));
+      } else if (n < done) {
         if (!drive.apply_late) {
           refuse(absl::OutOfRangeError(absl::StrFormat(
               "command %d: late: t_s %g s was already simulated (the swing is at %g s); not "
@@ -869,7 +895,12 @@ void SessionRegistry::EndDrive(Drive& drive, bool half_closed) {
     absl::MutexLock lock(&s.mu);
     if (drive.ended) return;
     drive.ended = true;
-    if (s.run != nullptr && s.run->driver == drive.watcher) s.run->driver = nullptr;
+    if (s.run != nullptr && s.run->driver == drive.watcher) {
+      s.run->driver = nullptr;
+      // Half-closed: "no more commands", the queued ones stand. Gone: the controller that
+      // sent them is gone too; the torques in force hold.
+      if (!half_closed) s.run->pending.clear();
+    }
     s.Forget(drive.watcher.get());
     if (half_closed) {
       pump = drive.watcher->Close(absl::OkStatus(), s.MakeFrame(s.NowTick(), false));
@@ -932,7 +963,10 @@ std::optional<std::string> AdvanceSwing(Session& s, int64_t k, std::vector<v1::S
       ended = absl::StrFormat("error: %s", st.message());
       break;
     }
+    // Checked where SimulateSwing checks it (every kCancelPollSteps steps), so that a swing
+    // its dry run accepted never fails here.
     if (s.solver.integrator == sw::SwingIntegrator::kDp45 &&
+        stepper.steps() % sw::SwingRunOptions::kCancelPollSteps == 0 &&
         stepper.steps() >= sw::SwingRunOptions::kMaxAdaptiveSteps) {
       ended = absl::StrFormat(
           "error: the swing took %d steps by t = %.6g s: loosen the tolerance or raise "
@@ -1027,8 +1061,7 @@ void SessionRegistry::Process(const std::shared_ptr<Session>& ptr, uint64_t gene
         for (v1::SwingEvent& e : events) fresh.push_back(s.Log(std::move(e), limits_.event_log));
         std::shared_ptr<SwingWatcher> driver;
         if (ended) {
-          EndSwing(s, *ended, limits_.event_log, &fresh, &driver);
-          swinging_.fetch_sub(1);
+          EndSwing(s, *ended, &fresh, &driver);
         }
         events_.fetch_add(static_cast<int64_t>(fresh.size()));
         std::shared_ptr<const SwingFrame> frame;
@@ -1066,6 +1099,10 @@ void SessionRegistry::Shutdown(const absl::Status& status) {
     absl::MutexLock lock(&p->mu);
     p->closed = true;
     const auto last = p->MakeFrame(p->NowTick(), false);
+    if (p->run != nullptr) {
+      p->run.reset();
+      swinging_.fetch_sub(1);
+    }
     for (const auto& w : p->watchers) {
       if (w->Close(status, last)) pump.push_back(w);
     }

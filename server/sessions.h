@@ -151,6 +151,9 @@ class SessionRegistry {
   friend struct Session;
   absl::StatusOr<std::shared_ptr<Session>> Find(const std::string& id);
   void Schedule(Session& s, SteadyClock::time_point when);
+  void EndSwing(Session& s, const std::string& reason,
+                std::vector<std::shared_ptr<const v1::SwingEvent>>* fresh,
+                std::shared_ptr<SwingWatcher>* driver);
   void Process(const std::shared_ptr<Session>& session, uint64_t generation,
                SteadyClock::time_point now);
 

@@ -552,6 +552,38 @@ TEST_F(SessionsTest, RefusedCommandsAreReportedAndChangeNothing) {
   EXPECT_NEAR(torques[0].t_s(), 0.2, 1e-12);
 }
 
+// Commands queued for ticks the swing never reaches are not lost silently: one past the last
+// tick is refused at once (OUT_OF_RANGE), and those still waiting when the swing ends (here at
+// impact, ~0.3 s) are refused with the last snapshot (FAILED_PRECONDITION), before ENDED.
+TEST_F(SessionsTest, CommandsTheSwingNeverReachesAreRefusedNotDropped) {
+  const v1::CreateSessionResponse s = Create();
+  FakeSink& sink = NewSink();
+  const std::shared_ptr<Drive> drive = StartDriving(DriveReq(s, 100, -10), sink);
+  ASSERT_NE(drive, nullptr);
+  reg_.Command(*drive, Cmd(1.0, 100, -10));  // 1: queued; impact comes first
+  reg_.Command(*drive, Cmd(1.5, 100, -10));  // 2: queued too
+  reg_.Command(*drive, Cmd(2.0, 100, -10));  // 3: the duration's own tick: never acts
+  absl::StatusOr<v1::SessionInfo> info = WaitFinished(s.session_id());
+  ASSERT_TRUE(info.ok()) << info.status();
+  EXPECT_EQ(info->last_end_reason(), "impact");
+  ASSERT_TRUE(WaitFor([&] { return sink.finished(); }));
+  const std::vector<v1::SwingSnapshot> got = sink.got();
+  const std::vector<v1::SwingEvent> refused = EventsOf(got, v1::SWING_EVENT_COMMAND_REFUSED);
+  ASSERT_EQ(refused.size(), 3u);
+  EXPECT_EQ(refused[0].command(), 3u);
+  EXPECT_EQ(refused[0].code(), kOutOfRange);
+  EXPECT_THAT(refused[0].reason(), HasSubstr("last tick"));
+  for (size_t i = 1; i < 3; ++i) {
+    EXPECT_EQ(refused[i].command(), i);
+    EXPECT_EQ(refused[i].code(), static_cast<int32_t>(absl::StatusCode::kFailedPrecondition));
+    EXPECT_THAT(refused[i].reason(), HasSubstr("ended (impact)"));
+    EXPECT_EQ(refused[i].command_t_s(), i == 1 ? 1.0 : 1.5);
+  }
+  EXPECT_EQ(reg_.stats().commands_refused, 3);
+  EXPECT_EQ(reg_.stats().commands, 0);
+  EXPECT_EQ(reg_.stats().swinging, 0);
+}
+
 // With apply_late, a command whose tick was already simulated is applied at the next tick and
 // reported as such; holding the same torques, it changes no bits.
 TEST_F(SessionsTest, ApplyLateAppliesALateCommandAtTheNextTick) {
