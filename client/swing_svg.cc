@@ -1,4 +1,5 @@
 #include "client/swing_svg.h"
+#include "client/table_svg.h"
 
 #include <algorithm>
 #include <cmath>
@@ -70,22 +71,6 @@ Pose PoseOf(const v1::SwingSample& s, const Lengths& len) {
     p.clubhead = Along(p.wrist, len.club_m, Rad(s.phi_deg()));
   }
   return p;
-}
-
-// Text for SVG: titles may carry user input.
-std::string Escape(std::string_view text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
-    }
-  }
-  return out;
 }
 
 }  // namespace
@@ -181,7 +166,7 @@ std::string SwingSvg(const SwingDrawing& d) {
       width_px, height_px + top + 50, width_px, height_px + top + 50);
   absl::StrAppendFormat(&svg, "<rect width=\"100%%\" height=\"100%%\" fill=\"#ffffff\"/>\n");
   absl::StrAppendFormat(&svg, "<text x=\"10\" y=\"26\" font-size=\"18\">%s</text>\n",
-                        Escape(d.title));
+                        SvgEscape(d.title));
   // The ground under the ball at impact, and the ball.
   if (impact) {
     const double ground = impact->clubhead.y - kBallRadiusM;

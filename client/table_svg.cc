@@ -60,8 +60,9 @@ bool PathAt(const BallPath& p, double t, double* x, double* y) {
   return true;
 }
 
-// Text for SVG: ids and titles come from users.
-std::string Escape(std::string_view text) {
+}  // namespace
+
+std::string SvgEscape(std::string_view text) {
   std::string out;
   for (char c : text) {
     switch (c) {
@@ -75,8 +76,6 @@ std::string Escape(std::string_view text) {
   }
   return out;
 }
-
-}  // namespace
 
 std::vector<BallPath> PathsFromShot(const v1::SimulateShotResponse& shot) {
   std::vector<BallPath> paths(shot.balls_size());
@@ -134,7 +133,7 @@ std::string TableSvg(const TableDrawing& d) {
       width_px, height_px + top + 30, width_px, height_px + top + 30);
   absl::StrAppendFormat(&svg, "<rect width=\"100%%\" height=\"100%%\" fill=\"#ffffff\"/>\n");
   absl::StrAppendFormat(&svg, "<text x=\"10\" y=\"26\" font-size=\"18\">%s</text>\n",
-                        Escape(d.title));
+                        SvgEscape(d.title));
   if (g.bounded()) {
     // Wooden rails, cloth inside the cushion noses, cushions, pockets.
     absl::StrAppendFormat(&svg,
@@ -217,7 +216,7 @@ std::string TableSvg(const TableDrawing& d) {
     absl::StrAppendFormat(&svg,
                           "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" fill=\"#ffffff\" "
                           "stroke=\"#000000\" stroke-width=\"0.4\">%s</text>\n",
-                          x + ball_px + 2, y - ball_px - 2, Escape(p.id));
+                          x + ball_px + 2, y - ball_px - 2, SvgEscape(p.id));
   }
   absl::StrAppendFormat(&svg,
                         "<text x=\"10\" y=\"%.0f\" font-size=\"13\">paths: solid lines (stripes "

@@ -4,11 +4,15 @@
 #define SPORTSIM_CLIENT_TABLE_SVG_H_
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "sportsim/v1/billiards.pb.h"
 
 namespace sportsim::cli {
+
+/// Text for SVG (ids and titles come from users): & < > " ' escaped.
+std::string SvgEscape(std::string_view text);
 
 /// One ball's path: points in time order, and where it started and ended.
 struct BallPath {
