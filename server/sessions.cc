@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_format.h"
 #include "server/billiards_convert.h"
+#include "server/event_log.h"
 #include "server/status_util.h"
 #include "server/swing_convert.h"
 #include "server/watcher_impl.h"
@@ -128,8 +129,7 @@ struct Session : Ticked, std::enable_shared_from_this<Session> {
   double qbeta ABSL_GUARDED_BY(mu) = 0;
   std::optional<sw::SwingSample> last_impact ABSL_GUARDED_BY(mu);
   std::string last_end_reason ABSL_GUARDED_BY(mu);
-  std::deque<SwingEventPtr> log ABSL_GUARDED_BY(mu);
-  uint64_t evicted_sequence ABSL_GUARDED_BY(mu) = 0;
+  EventLog<v1::SwingEvent> log ABSL_GUARDED_BY(mu);
   std::vector<std::shared_ptr<SwingWatcher>> watchers ABSL_GUARDED_BY(mu);
   bool deleted ABSL_GUARDED_BY(mu) = false;
   bool closed ABSL_GUARDED_BY(mu) = false;
@@ -167,14 +167,7 @@ struct Session : Ticked, std::enable_shared_from_this<Session> {
     return f;
   }
   SwingEventPtr Log(v1::SwingEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    e.set_sequence(sequence);
-    auto p = std::make_shared<const v1::SwingEvent>(std::move(e));
-    log.push_back(p);
-    while (static_cast<int>(log.size()) > event_log) {
-      evicted_sequence = log.front()->sequence();
-      log.pop_front();
-    }
-    return p;
+    return log.Append(std::move(e), sequence, event_log);
   }
   void OfferAll(const std::shared_ptr<const SwingFrame>& frame,
                 const std::vector<SwingEventPtr>& fresh,
@@ -662,15 +655,12 @@ absl::StatusOr<std::shared_ptr<SwingWatcher>> SessionRegistry::Watch(
   }
   std::vector<SwingEventPtr> replay;
   if (request.has_from_sequence()) {
-    if (request.from_sequence() > s.sequence) {
-      return absl::OutOfRangeError(
-          absl::StrFormat("from_sequence %d is ahead of the session's sequence %d",
-                          request.from_sequence(), s.sequence));
-    }
-    if (s.evicted_sequence > request.from_sequence()) watcher->MarkResync();
-    for (const SwingEventPtr& e : s.log) {
-      if (e->sequence() > request.from_sequence()) replay.push_back(e);
-    }
+    bool lost = false;
+    absl::StatusOr<std::vector<SwingEventPtr>> after =
+        s.log.After(request.from_sequence(), s.sequence, "session", &lost);
+    if (!after.ok()) return after.status();
+    if (lost) watcher->MarkResync();
+    replay = *std::move(after);
   }
   const int64_t tick = s.NowTick();
   watcher->Due(tick);  // the first snapshot is now

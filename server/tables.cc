@@ -7,6 +7,7 @@
 
 #include "absl/strings/str_format.h"
 #include "server/billiards_convert.h"
+#include "server/event_log.h"
 #include "server/status_util.h"
 #include "server/watcher_impl.h"
 #include "server/world.h"
@@ -92,8 +93,7 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
   v1::ShotSummary current ABSL_GUARDED_BY(mu);   // the shot in progress
   v1::ShotSummary last_shot ABSL_GUARDED_BY(mu);
   uint64_t shots ABSL_GUARDED_BY(mu) = 0;
-  std::deque<EventPtr> log ABSL_GUARDED_BY(mu);
-  uint64_t evicted_sequence ABSL_GUARDED_BY(mu) = 0;  // highest sequence no longer held
+  EventLog<v1::TableEvent> log ABSL_GUARDED_BY(mu);
   std::vector<std::shared_ptr<Watcher>> watchers ABSL_GUARDED_BY(mu);
   bool deleted ABSL_GUARDED_BY(mu) = false;
   bool closed ABSL_GUARDED_BY(mu) = false;  // the server is shutting down
@@ -177,15 +177,8 @@ struct Table : Ticked, std::enable_shared_from_this<Table> {
     }
     return seat;
   }
-    EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    e.set_sequence(sequence);
-    auto p = std::make_shared<const v1::TableEvent>(std::move(e));
-    log.push_back(p);
-    while (static_cast<int>(log.size()) > event_log) {
-      evicted_sequence = log.front()->sequence();
-      log.pop_front();
-    }
-    return p;
+  EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    return log.Append(std::move(e), sequence, event_log);
   }
 };
 
@@ -731,15 +724,12 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
     }
     std::vector<EventPtr> replay;
     if (request.has_from_sequence()) {
-      if (request.from_sequence() > t.sequence) {
-        return absl::OutOfRangeError(absl::StrFormat(
-            "from_sequence %d is ahead of the table's sequence %d", request.from_sequence(),
-            t.sequence));
-      }
-      if (t.evicted_sequence > request.from_sequence()) watcher->MarkResync();
-      for (const EventPtr& e : t.log) {
-        if (e->sequence() > request.from_sequence()) replay.push_back(e);
-      }
+      bool lost = false;
+      absl::StatusOr<std::vector<EventPtr>> after =
+          t.log.After(request.from_sequence(), t.sequence, "table", &lost);
+      if (!after.ok()) return after.status();
+      if (lost) watcher->MarkResync();
+      replay = *std::move(after);
     }
     const int64_t tick = t.NowTick();
     watcher->Due(tick);  // the first snapshot is now
