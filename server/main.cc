@@ -27,6 +27,14 @@ ABSL_FLAG(int, max_watchers_per_table, 64, "Most WatchTable streams per table");
 ABSL_FLAG(std::string, metrics_listen, "",
           "HOST:PORT of a Prometheus /metrics endpoint (e.g. 127.0.0.1:9464; port 0: any free "
           "port, printed at start); off when empty");
+ABSL_FLAG(absl::Duration, keepalive_time, absl::Seconds(30),
+          "Ping a connection silent for this long; with --keepalive_timeout, how soon a vanished "
+          "client's streams end");
+ABSL_FLAG(absl::Duration, keepalive_timeout, absl::Seconds(10),
+          "Drop a connection whose keepalive ping is not answered in this long");
+ABSL_FLAG(absl::Duration, min_client_ping_interval, absl::Seconds(10),
+          "Clients may send keepalive pings this often (with or without calls); faster pings "
+          "get a GOAWAY");
 ABSL_FLAG(int, max_sessions, 2000, "Most swing sessions the server holds at once");
 ABSL_FLAG(int, max_watchers_per_session, 64,
           "Most WatchSwing and DriveSwing streams per swing session");
@@ -70,6 +78,9 @@ int main(int argc, char** argv) {
   sportsim::server::ServerConfig config;
   config.listen = absl::GetFlag(FLAGS_listen);
   config.metrics_listen = absl::GetFlag(FLAGS_metrics_listen);
+  config.keepalive_time = absl::GetFlag(FLAGS_keepalive_time);
+  config.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout);
+  config.min_client_ping_interval = absl::GetFlag(FLAGS_min_client_ping_interval);
   config.max_receive_message_bytes = absl::GetFlag(FLAGS_max_request_bytes);
   config.tables.max_tables = absl::GetFlag(FLAGS_max_tables);
   config.tables.max_watchers_per_table = absl::GetFlag(FLAGS_max_watchers_per_table);

@@ -6,6 +6,8 @@
 
 #include <cerrno>
 #include <charconv>
+#include <algorithm>
+#include <cstdint>
 #include <cstring>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
@@ -19,6 +21,11 @@
 
 namespace sportsim::server {
 namespace {
+
+// A duration in whole milliseconds, as gRPC's integer channel arguments take it.
+int DurationMs(absl::Duration d) {
+  return static_cast<int>(std::min<int64_t>(absl::ToInt64Milliseconds(d), INT32_MAX));
+}
 
 // Binds a throwaway socket to learn, with the OS's own words, whether gRPC will be able to
 // listen there (gRPC's own failure is a multi-line log and a null server).
@@ -88,6 +95,21 @@ absl::StatusOr<ListenAddress> ParseListenAddress(std::string_view address) {
 }
 
 absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& config) {
+  struct {
+    const char* name;
+    absl::Duration value, lo, hi;
+  } durations[] = {
+      {"keepalive_time", config.keepalive_time, absl::Milliseconds(10), absl::Hours(24)},
+      {"keepalive_timeout", config.keepalive_timeout, absl::Milliseconds(10), absl::Hours(1)},
+      {"min_client_ping_interval", config.min_client_ping_interval, absl::Milliseconds(10),
+       absl::Hours(24)}};
+  for (const auto& d : durations) {
+    if (d.value < d.lo || d.value > d.hi) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("--%s must be in [%s, %s], got %s", d.name, absl::FormatDuration(d.lo),
+                          absl::FormatDuration(d.hi), absl::FormatDuration(d.value)));
+    }
+  }
   absl::StatusOr<ListenAddress> address = ParseListenAddress(config.listen);
   if (!address.ok()) return address.status();
   if (address->port != 0) {
@@ -123,6 +145,14 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   }
   // Without this, gRPC sets SO_REUSEPORT and a second server would share a busy port silently.
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIME_MS, DurationMs(config.keepalive_time));
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_TIMEOUT_MS, DurationMs(config.keepalive_timeout));
+  // Server pings need no open call (an idle channel between streams is kept checked), and
+  // clients may keep an idle channel alive with their own pings.
+  builder.AddChannelArgument(GRPC_ARG_KEEPALIVE_PERMIT_WITHOUT_CALLS, 1);
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MIN_RECV_PING_INTERVAL_WITHOUT_DATA_MS,
+                             DurationMs(config.min_client_ping_interval));
+  builder.AddChannelArgument(GRPC_ARG_HTTP2_MAX_PING_STRIKES, 2);
   builder.SetMaxReceiveMessageSize(config.max_receive_message_bytes);
   builder.SetMaxSendMessageSize(config.max_send_message_bytes);
   const std::string target = address->host.find(':') != std::string::npos

@@ -27,6 +27,14 @@ struct ServerConfig {
   int max_send_message_bytes = 64 << 20;    ///< sampled trajectories can be large: 64 MiB
   std::string metrics_listen;  ///< host:port of the Prometheus /metrics endpoint; "" = off
   int tick_workers = 0;  ///< threads ticking every table and session; 0: one per core
+  // Keepalive for long-lived watch and drive streams (docs/operations.md). The server pings a
+  // connection that has been silent for keepalive_time and drops it when the ping is not
+  // answered within keepalive_timeout, so a vanished client's streams end (and free their
+  // watcher slots) in under a minute. Clients may ping too, with or without calls open, but
+  // no more often than min_client_ping_interval; faster pings get a GOAWAY (too_many_pings).
+  absl::Duration keepalive_time = absl::Seconds(30);             ///< --keepalive_time
+  absl::Duration keepalive_timeout = absl::Seconds(10);          ///< --keepalive_timeout
+  absl::Duration min_client_ping_interval = absl::Seconds(10);   ///< --min_client_ping_interval
   TableLimits tables;
   SessionLimits sessions;
 };
