@@ -12,6 +12,7 @@
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
+#include "client/swing_flags.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
 // Shared with `swing simulate` (defined in swing_commands.cc).
@@ -28,6 +29,9 @@ ABSL_FLAG(std::optional<double>, temperature_c, std::nullopt, "Air temperature (
 ABSL_FLAG(std::optional<double>, pressure_pa, std::nullopt, "Sea-level pressure (Pa); default 101325");
 ABSL_FLAG(std::optional<double>, humidity, std::nullopt, "Relative humidity, 0 to 1; default 0");
 ABSL_FLAG(std::optional<double>, altitude_m, std::nullopt, "Course elevation (m); default 0");
+ABSL_FLAG(std::string, aero, "ferguson2022",
+          "Aerodynamic fit: ferguson2022 (Ferguson, McNally & McPhee 2022) or nathan (Nathan's "
+          "golf trajectory calculator)");
 ABSL_FLAG(std::optional<double>, sample_interval, std::nullopt, "Sample spacing (s); default 0.01");
 
 namespace sportsim::cli {
@@ -46,6 +50,21 @@ std::optional<std::string> BuildRequest(v1::SimulateFlightRequest* r) {
   l->set_spin_rpm(*spin);
   l->set_spin_axis_deg(absl::GetFlag(FLAGS_spin_axis_deg));
   l->set_launch_direction_deg(absl::GetFlag(FLAGS_launch_direction_deg));
+  if (auto bad = BuildFlightAir(r)) return bad;
+  if (auto v = absl::GetFlag(FLAGS_dt)) r->set_dt_s(*v);
+  for (const std::string& e : absl::GetFlag(FLAGS_disable)) {
+    if (e == "drag") r->add_disabled_effects(v1::FLIGHT_EFFECT_DRAG);
+    else if (e == "lift") r->add_disabled_effects(v1::FLIGHT_EFFECT_LIFT);
+    else if (e == "spin_decay") r->add_disabled_effects(v1::FLIGHT_EFFECT_SPIN_DECAY);
+    else if (e == "wind") r->add_disabled_effects(v1::FLIGHT_EFFECT_WIND);
+    else return "--disable for flight takes drag, lift, spin_decay, wind; got '" + e + "'";
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<std::string> BuildFlightAir(v1::SimulateFlightRequest* r) {
   if (const std::string w = absl::GetFlag(FLAGS_wind); !w.empty()) {
     const std::vector<std::string> parts = absl::StrSplit(w, ',');
     double v = 0;
@@ -67,19 +86,18 @@ std::optional<std::string> BuildRequest(v1::SimulateFlightRequest* r) {
   if (auto v = absl::GetFlag(FLAGS_pressure_pa)) a->set_sea_level_pressure_pa(*v);
   if (auto v = absl::GetFlag(FLAGS_humidity)) a->set_relative_humidity(*v);
   if (auto v = absl::GetFlag(FLAGS_altitude_m)) a->set_altitude_m(*v);
-  if (auto v = absl::GetFlag(FLAGS_dt)) r->set_dt_s(*v);
   if (auto v = absl::GetFlag(FLAGS_sample_interval)) r->set_sample_interval_s(*v);
-  for (const std::string& e : absl::GetFlag(FLAGS_disable)) {
-    if (e == "drag") r->add_disabled_effects(v1::FLIGHT_EFFECT_DRAG);
-    else if (e == "lift") r->add_disabled_effects(v1::FLIGHT_EFFECT_LIFT);
-    else if (e == "spin_decay") r->add_disabled_effects(v1::FLIGHT_EFFECT_SPIN_DECAY);
-    else if (e == "wind") r->add_disabled_effects(v1::FLIGHT_EFFECT_WIND);
-    else return "--disable for flight takes drag, lift, spin_decay, wind; got '" + e + "'";
+  if (const std::string fit = absl::GetFlag(FLAGS_aero); fit == "ferguson2022") {
+    r->set_aero_fit(v1::AERO_FIT_FERGUSON_2022);
+  } else if (fit == "nathan") {
+    r->set_aero_fit(v1::AERO_FIT_NATHAN);
+  } else {
+    return "--aero takes ferguson2022 or nathan; got '" + fit + "'";
   }
   return std::nullopt;
 }
 
-void PrintText(const v1::SimulateFlightResponse& f) {
+void PrintFlightText(const v1::SimulateFlightResponse& f) {
   std::printf(
       "carry %.2f m (%.1f yd), %.2f m along the target line, %.2f m %s\n"
       "apex %.2f m (%.1f yd) at %.3f s; flight %.3f s\n"
@@ -89,6 +107,8 @@ void PrintText(const v1::SimulateFlightResponse& f) {
       f.apex_time_s(), f.flight_time_s(), f.landing_angle_deg(), f.landing_speed_mps(),
       f.air_density_kgpm3(), f.steps(), f.cpu_s() * 1e3);
 }
+
+namespace {
 
 void PrintCsv(const v1::SimulateFlightResponse& f) {
   std::cout << "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,speed_mps,spin_rpm\n";
@@ -107,7 +127,7 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   v1::SimulateFlightResponse response;
   const grpc::Status status = stub->SimulateFlight(ctx.NewCall().get(), request, &response);
   if (!status.ok()) return ReportRpcError(status);
-  return PrintResponse(ctx, response, PrintCsv, PrintText);
+  return PrintResponse(ctx, response, PrintCsv, PrintFlightText);
 }
 
 }  // namespace

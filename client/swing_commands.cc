@@ -35,6 +35,15 @@ ABSL_FLAG(std::optional<double>, club_mass, std::nullopt, "Club mass (kg); defau
 ABSL_FLAG(std::optional<double>, club_first_moment, std::nullopt, "Club first moment about the wrists (kg m); default 0.33");
 ABSL_FLAG(std::optional<double>, gravity, std::nullopt, "Gravity (m/s^2); default 9.8");
 ABSL_FLAG(std::vector<std::string>, disable, {}, "Effects to switch off (swing: gravity,shoulder_accel,wrist_torque; shot: see info)");
+ABSL_FLAG(std::string, club, "",
+          "swing simulate: launch a ball at the impact with this club (driver, 3-wood, 3-iron, "
+          "5-iron, 7-iron, 9-iron, pitching-wedge, sand-wedge) and fly it (flight's air flags)");
+ABSL_FLAG(std::optional<double>, dynamic_loft_deg, std::nullopt,
+          "With --club: face loft at impact (deg); default the club's static loft");
+ABSL_FLAG(double, face_angle_deg, 0.0, "With --club: face angle (deg), + open (right)");
+ABSL_FLAG(double, club_path_deg, 0.0, "With --club: club path (deg), + in-to-out (right)");
+ABSL_FLAG(std::optional<double>, cor, std::nullopt,
+          "With --club: coefficient of restitution; default the club's (0.83)");
 ABSL_FLAG(int, stride, 0, "Keep every n-th step as a sample (0: automatic)");
 
 namespace sportsim::cli {
@@ -148,6 +157,20 @@ std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
   const int stride = absl::GetFlag(FLAGS_stride);
   if (stride < 0) return "--stride must be >= 0";
   r->set_sample_stride(static_cast<uint32_t>(stride));
+  if (const std::string club = absl::GetFlag(FLAGS_club); !club.empty()) {
+    v1::BallStrike* b = r->mutable_ball();
+    b->set_club(club);
+    if (auto v = absl::GetFlag(FLAGS_dynamic_loft_deg)) b->set_dynamic_loft_deg(*v);
+    b->set_face_angle_deg(absl::GetFlag(FLAGS_face_angle_deg));
+    b->set_club_path_deg(absl::GetFlag(FLAGS_club_path_deg));
+    if (auto v = absl::GetFlag(FLAGS_cor)) b->set_cor(*v);
+    v1::SimulateFlightRequest air;
+    if (auto bad = BuildFlightAir(&air)) return bad;
+    *b->mutable_atmosphere() = air.atmosphere();
+    *b->mutable_wind() = air.wind();
+    b->set_aero_fit(air.aero_fit());
+    if (air.has_sample_interval_s()) b->set_sample_interval_s(air.sample_interval_s());
+  }
   return std::nullopt;
 }
 
@@ -168,6 +191,21 @@ void PrintText(const v1::SimulateSwingResponse& r) {
   std::printf("%u steps (%u rejected), %u force evaluations, %d samples, %.3f ms CPU\n",
               r.steps(), r.rejected_steps(), r.rhs_evaluations(), r.samples_size(),
               r.cpu_s() * 1e3);
+  if (r.has_ball()) {
+    const v1::BallLaunch& b = r.ball();
+    if (!b.error().empty()) {
+      std::printf("ball (%s): not launched: %s\n", b.club().c_str(), b.error().c_str());
+      return;
+    }
+    const v1::LaunchConditions& l = b.launch();
+    std::printf(
+        "ball (%s): %.2f m/s (smash %.3f), launch %.2f deg, direction %.2f deg, spin %.0f rpm "
+        "(backspin %.0f, sidespin %.0f), spin loft %.2f deg, attack %.2f deg\n",
+        b.club().c_str(), l.ball_speed_mps(), b.smash_factor(), l.launch_angle_deg(),
+        l.launch_direction_deg(), l.spin_rpm(), b.backspin_rpm(), b.sidespin_rpm(),
+        b.spin_loft_deg(), b.attack_angle_deg());
+    PrintFlightText(b.flight());
+  }
 }
 
 void PrintCsv(const v1::SimulateSwingResponse& r) {

@@ -26,6 +26,13 @@ std::optional<std::string> BuildTorqueProgram(v1::TorqueProgram* torques);
 /// --until impact|duration, --duration
 std::optional<std::string> BuildSwingStop(v1::SwingStop* stop, std::optional<double>* duration_s);
 
+/// The flight's air flags (defined in flight_commands.cc): --wind --temperature-c --pressure-pa
+/// --humidity --altitude-m --sample-interval --aero. Shared by `flight simulate` and the ball a
+/// swing launches (`swing simulate --club`).
+std::optional<std::string> BuildFlightAir(v1::SimulateFlightRequest* request);
+/// The text summary of a flight (carry, apex, landing).
+void PrintFlightText(const v1::SimulateFlightResponse& flight);
+
 /// --arm-length and --club-length as given (unset when not), for drawings.
 std::optional<double> ArmLengthFlag();
 std::optional<double> ClubLengthFlag();

@@ -245,6 +245,7 @@ class SwingService final : public v1::Swing::CallbackService {
     const double cpu_s = ThreadCpuSeconds() - cpu0;
     if (!result.ok()) return result.status();
     SwingResultToProto(*result, cpu_s, response);
+    if (job->strike && result->impact) LaunchBall(*job->strike, *result->impact, response->mutable_ball());
     return absl::OkStatus();
   }
 

@@ -111,6 +111,7 @@ struct Session : Ticked, std::enable_shared_from_this<Session> {
   google::protobuf::RepeatedField<int> disabled_effects;
   sw::SwingSolverOptions solver;
   bool realistic = true;
+  std::optional<StrikeJob> strike;  // CreateSession's `ball`: launched at each impact
   double tick_hz = kDefaultTickHz;
   double period_s = 1.0 / kDefaultTickHz;
   std::vector<SeatEntry> seats;
@@ -241,7 +242,18 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::Create(
         absl::StrFormat("profile: unknown profile %d", request.profile()));
   }
 
+  std::optional<StrikeJob> strike;
+  if (request.has_ball()) {
+    v1::BallStrike ball = request.ball();
+    // A stream event should stay small: ~70 samples for a 7 s flight, not 700.
+    if (!ball.has_sample_interval_s()) ball.set_sample_interval_s(0.1);
+    absl::StatusOr<StrikeJob> job = StrikeJobFromProto(ball);
+    if (!job.ok()) return job.status();
+    strike = *std::move(job);
+  }
+
   auto session = std::make_shared<Session>(this);
+  session->strike = std::move(strike);
   session->tick_hz = tick_hz;
   session->period_s = 1.0 / tick_hz;
   session->disabled_effects = request.disabled_effects();
@@ -937,6 +949,9 @@ std::optional<std::string> AdvanceSwing(Session& s, int64_t k, std::vector<v1::S
   const auto report_impact = [&] {
     v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_IMPACT, r.impact->t_s, s.swings, k);
     ImpactToProto(*r.impact, e.mutable_impact());
+    // The ball's flight (~1 ms of CPU for a 7 s flight at the default 1 ms step) runs here, on
+    // the tick, once per swing.
+    if (s.strike) LaunchBall(*s.strike, *r.impact, e.mutable_ball());
     e.set_seat(r.seat);
     out->push_back(std::move(e));
     r.impact_reported = true;

@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "server/status_util.h"
+#include "sim/core/cpu_clock.h"
 #include "sim/core/units.h"
 
 namespace sportsim::server {
@@ -163,7 +164,13 @@ absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& r) {
     run.sample_stride = std::max(1, static_cast<int>(std::ceil(steps / kAutoSamples)));
   }
   if (absl::Status s = swing::ValidateRunOptions(*solver, run); !s.ok()) return s;
-  return SwingJob{*std::move(model), *std::move(program), *solver, run};
+  SwingJob job{*std::move(model), *std::move(program), *solver, run, std::nullopt};
+  if (r.has_ball()) {
+    absl::StatusOr<StrikeJob> strike = StrikeJobFromProto(r.ball());
+    if (!strike.ok()) return strike.status();
+    job.strike = *std::move(strike);
+  }
+  return job;
 }
 
 void SampleToProto(const swing::SwingSample& s, v1::SwingSample* out) {
@@ -248,6 +255,16 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
             "disabled_effects[%d]: unknown effect %d", i, static_cast<int>(r.disabled_effects(i))));
     }
   }
+  switch (r.aero_fit()) {
+    case v1::AERO_FIT_UNSPECIFIED:
+    case v1::AERO_FIT_FERGUSON_2022:
+      job.options.aero.fit = swing::AeroFit::kFergusonMcNallyMcPhee2022;
+      break;
+    case v1::AERO_FIT_NATHAN: job.options.aero.fit = swing::AeroFit::kNathan; break;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrFormat("aero_fit: unknown fit %d", static_cast<int>(r.aero_fit())));
+  }
   // Tighter than the library's own limits: a request must stay cheap and its answer small
   // (a flight lasts at most 60 s: at most 6e6 steps and 6e4 samples).
   if (r.has_dt_s()) {
@@ -266,6 +283,81 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
     job.options.sample_interval_s = r.sample_interval_s();
   }
   return job;
+}
+
+absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
+  StrikeJob job;
+  const std::string club = b.club().empty() ? "driver" : b.club();
+  absl::StatusOr<swing::ClubSpec> spec = swing::ClubPreset(club);
+  if (!spec.ok()) return PrefixStatus("ball.club: ", spec.status());
+  job.club = *spec;
+  if (b.has_cor()) job.club.cor = b.cor();
+  if (absl::Status s = swing::ValidateClubSpec(job.club); !s.ok()) return PrefixStatus("ball.", s);
+  if (b.has_dynamic_loft_deg()) job.delivery.dynamic_loft_deg = b.dynamic_loft_deg();
+  job.delivery.face_angle_deg = b.face_angle_deg();
+  job.delivery.club_path_deg = b.club_path_deg();
+  // The delivery's own limits, checked now with a placeholder speed and a level attack, so a
+  // bad face or loft is refused before any swing runs.
+  swing::ClubDelivery probe = job.delivery;
+  probe.clubhead_speed_mps = 40.0;
+  if (absl::StatusOr<swing::ImpactResult> i = swing::SimulateImpact(probe, job.club, {});
+      !i.ok()) {
+    return PrefixStatus("ball.", i.status());
+  }
+  // The flight settings, validated as SimulateFlight would with a placeholder launch.
+  *job.flight.mutable_atmosphere() = b.atmosphere();
+  *job.flight.mutable_wind() = b.wind();
+  *job.flight.mutable_disabled_effects() = b.disabled_flight_effects();
+  job.flight.set_aero_fit(b.aero_fit());
+  if (b.has_sample_interval_s()) job.flight.set_sample_interval_s(b.sample_interval_s());
+  v1::SimulateFlightRequest probe_flight = job.flight;
+  probe_flight.mutable_launch()->set_ball_speed_mps(60.0);
+  if (absl::StatusOr<FlightJob> f = FlightJobFromProto(probe_flight); !f.ok()) {
+    return PrefixStatus("ball.", f.status());
+  }
+  return job;
+}
+
+void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::BallLaunch* out) {
+  swing::ClubDelivery delivery = job.delivery;
+  delivery.clubhead_speed_mps = impact.clubhead_speed_ground_mps;
+  // The ground-frame velocity's angle above the horizontal, toward the target (-x).
+  delivery.attack_angle_deg =
+      RadToDeg(std::atan2(impact.clubhead_vy_ground_mps, -impact.clubhead_vx_ground_mps));
+  out->set_club(job.club.name);
+  out->set_clubhead_speed_mps(delivery.clubhead_speed_mps);
+  out->set_attack_angle_deg(delivery.attack_angle_deg);
+  absl::StatusOr<swing::ImpactResult> hit = swing::SimulateImpact(delivery, job.club, {});
+  if (!hit.ok()) {
+    out->set_error(absl::StrCat("impact: ", hit.status().message()));
+    return;
+  }
+  v1::LaunchConditions* l = out->mutable_launch();
+  l->set_ball_speed_mps(hit->launch.ball_speed_mps);
+  l->set_launch_angle_deg(hit->launch.launch_angle_deg);
+  l->set_launch_direction_deg(hit->launch.launch_direction_deg);
+  l->set_spin_rpm(hit->launch.spin_rpm);
+  l->set_spin_axis_deg(hit->launch.spin_axis_deg);
+  out->set_smash_factor(hit->smash_factor);
+  out->set_backspin_rpm(hit->backspin_rpm);
+  out->set_sidespin_rpm(hit->sidespin_rpm);
+  out->set_spin_loft_deg(hit->spin_loft_deg);
+  v1::SimulateFlightRequest request = job.flight;
+  *request.mutable_launch() = *l;
+  absl::StatusOr<FlightJob> flight = FlightJobFromProto(request);
+  if (!flight.ok()) {
+    out->set_error(absl::StrCat("flight: ", flight.status().message()));
+    return;
+  }
+  const double cpu0 = ThreadCpuSeconds();
+  absl::StatusOr<swing::FlightResult> result = swing::SimulateFlight(
+      flight->ball, flight->launch, flight->atmosphere, flight->wind, flight->options);
+  const double cpu_s = ThreadCpuSeconds() - cpu0;
+  if (!result.ok()) {
+    out->set_error(absl::StrCat("flight: ", result.status().message()));
+    return;
+  }
+  FlightResultToProto(*result, cpu_s, out->mutable_flight());
 }
 
 void FlightResultToProto(const swing::FlightResult& f, double cpu_s,

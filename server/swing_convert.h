@@ -2,11 +2,13 @@
 #ifndef SPORTSIM_SERVER_SWING_CONVERT_H_
 #define SPORTSIM_SERVER_SWING_CONVERT_H_
 
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "absl/status/statusor.h"
 #include "sim/swing/ball_flight.h"
+#include "sim/swing/club_ball_impact.h"
 #include "sim/swing/golf_ball.h"
 #include "sim/swing/swing_model.h"
 #include "sim/swing/swing_simulation.h"
@@ -17,13 +19,28 @@
 
 namespace sportsim::server {
 
+/// A validated BallStrike: the club and face, and the flight settings (its launch is filled in
+/// from the impact).
+struct StrikeJob {
+  swing::ClubSpec club;
+  swing::ClubDelivery delivery;  // speed and attack angle come from the swing's impact
+  v1::SimulateFlightRequest flight;
+};
+
 /// Everything a SimulateSwingRequest asks for, validated.
 struct SwingJob {
   swing::SwingModel model;
   swing::TorqueProgram program;
   swing::SwingSolverOptions solver;
   swing::SwingRunOptions run;
+  std::optional<StrikeJob> strike;  // the request's `ball`, when set
 };
+
+/// BallStrike -> validated StrikeJob; errors name "ball.<field>".
+absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& strike);
+/// Launches and flies the ball from the swing's impact. Never fails: a delivery the impact or
+/// flight model refuses is reported in `out->error`.
+void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::BallLaunch* out);
 
 /// Parameters (chapter defaults for unset fields) -> validated model. Field names in errors are
 /// the proto's (e.g. "parameters.gamma_deg").

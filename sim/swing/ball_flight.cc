@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
@@ -54,6 +55,7 @@ struct Model {
   bool spin_decay = false;
   bool wind = false;
   bool instantaneous_decay = false;
+  bool breakpoints = false;        // the fit in use has kinks to step onto
   double inv_tau_launch = 0.0;     // 1/tau0 (1/s), kLaunchSpeed
   Wind wind_spec;
   Vector3d wind_uniform = Vector3d::Zero();  // uniform profile (m/s)
@@ -228,12 +230,43 @@ double AirSpeed(const Model& model, const State& y) {
   return u.norm();
 }
 
-// Which piece of C_D0(Re) applies: 0 (Re <= re_low), 1 (between), 2
-// (Re >= re_high). Mirrors the branches of DragCoefficient.
-int DragRegime(const Model& model, double air_speed) {
-  const double re = model.re_per_speed * air_speed;
-  if (re <= model.aero.re_low) return 0;
-  return re >= model.aero.re_high ? 2 : 1;
+// The variable whose breakpoints split the fit into smooth pieces: the air
+// speed (Re / re_per_speed) for Nathan's C_D0(Re), the spin parameter S for
+// Ferguson et al.'s clamped quadratics (infinite when the air is still).
+double PieceVariable(const Model& model, const State& y) {
+  const double speed = AirSpeed(model, y);
+  if (model.aero.fit == AeroFit::kNathan) return speed;
+  return speed > kMinAirSpeedMps ? model.radius * y[kW] / speed
+                                 : std::numeric_limits<double>::infinity();
+}
+
+// d/dt of PieceVariable along the solution (dy = the derivative at y).
+double PieceVariableRate(const Model& model, const State& y, const State& dy) {
+  Vector3d u = y.segment<3>(3);
+  if (model.wind) u -= WindAt(model, y[kZ]);
+  const double speed = u.norm();
+  // d|u|/dt ~ u.a / |u| (the wind's height gradient is left out: a Newton
+  // slope need not be exact).
+  const double speed_rate = u.dot(dy.segment<3>(3)) / speed;
+  if (model.aero.fit == AeroFit::kNathan) return speed_rate;
+  return model.radius * (dy[kW] - y[kW] * speed_rate / speed) / speed;
+}
+
+// The lower (upper = false) or upper breakpoint of PieceVariable.
+double Breakpoint(const Model& model, bool upper) {
+  if (model.aero.fit == AeroFit::kNathan) {
+    return (upper ? model.aero.re_high : model.aero.re_low) / model.re_per_speed;
+  }
+  return upper ? model.aero.s_max : model.aero.s_min;
+}
+
+// Which piece of the fit applies: 0 (at or below the lower breakpoint), 1
+// (between), 2 (at or above the upper one). Mirrors the branches of
+// DragCoefficient and LiftCoefficient.
+int DragRegime(const Model& model, const State& y) {
+  const double v = PieceVariable(model, y);
+  if (v <= Breakpoint(model, false)) return 0;
+  return v >= Breakpoint(model, true) ? 2 : 1;
 }
 
 // One step of the chosen scheme without error control (h = 0: no step).
@@ -251,8 +284,7 @@ double RegimeCrossing(const Model& model, const State& y0, const State& f0,
                       const State& y1, const State& f1, double h, bool upward,
                       int target) {
   const auto reached = [&](double theta) {
-    const int r =
-        DragRegime(model, AirSpeed(model, Hermite(y0, f0, y1, f1, h, theta)));
+    const int r = DragRegime(model, Hermite(y0, f0, y1, f1, h, theta));
     return upward ? r >= target : r <= target;
   };
   double lo = 0.0, hi = 1.0;
@@ -309,6 +341,22 @@ absl::Status ValidateWind(const Wind& wind) {
 }
 
 absl::Status ValidateAero(const AeroCoefficients& a) {
+  if (a.fit != AeroFit::kFergusonMcNallyMcPhee2022 && a.fit != AeroFit::kNathan) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "aero fit must be kFergusonMcNallyMcPhee2022 or kNathan, got %d",
+        static_cast<int>(a.fit)));
+  }
+  const struct {
+    const char* name;
+    double value;
+  } poly[] = {{"aero cd_c0", a.cd_c0}, {"aero cd_c1", a.cd_c1}, {"aero cd_c2", a.cd_c2},
+              {"aero cl_c0", a.cl_c0}, {"aero cl_c1", a.cl_c1}, {"aero cl_c2", a.cl_c2}};
+  for (const auto& c : poly) {
+    if (auto s = CheckFiniteInRange(c.name, c.value, -10, false, 10, false); !s.ok()) return s;
+  }
+  if (auto s = CheckFiniteInRange("aero s_max", a.s_max, 0, true, 10, false); !s.ok()) return s;
+  if (auto s = CheckFiniteInRange("aero s_min", a.s_min, 0, true, a.s_max, true); !s.ok())
+    return s;
   if (auto s = CheckFiniteInRange("aero cd_low", a.cd_low, 0, false, 10, false); !s.ok())
     return s;
   if (auto s = CheckFiniteInRange("aero cd_high", a.cd_high, 0, false, 10, false);
@@ -449,6 +497,10 @@ Vector3d WindVelocity(const Wind& wind, double height_m) {
 
 double DragCoefficient(const AeroCoefficients& aero, double reynolds,
                        double spin_parameter) {
+  if (aero.fit == AeroFit::kFergusonMcNallyMcPhee2022) {
+    const double sp = std::clamp(spin_parameter, aero.s_min, aero.s_max);
+    return aero.cd_c0 + sp * (aero.cd_c1 + sp * aero.cd_c2);
+  }
   double cd0;
   if (reynolds <= aero.re_low) {
     cd0 = aero.cd_low;
@@ -464,6 +516,15 @@ double DragCoefficient(const AeroCoefficients& aero, double reynolds,
 
 double LiftCoefficient(const AeroCoefficients& aero, double spin_parameter) {
   if (!(spin_parameter > 0.0)) return 0.0;
+  if (aero.fit == AeroFit::kFergusonMcNallyMcPhee2022) {
+    const auto quadratic = [&](double sp) {
+      return aero.cl_c0 + sp * (aero.cl_c1 + sp * aero.cl_c2);
+    };
+    if (spin_parameter < aero.s_min) {
+      return quadratic(aero.s_min) * spin_parameter / aero.s_min;
+    }
+    return std::max(0.0, quadratic(std::min(spin_parameter, aero.s_max)));
+  }
   return aero.cl_amplitude * std::pow(spin_parameter, aero.cl_exponent);
 }
 
@@ -507,6 +568,9 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
   model.aero = options.aero;
   model.drag = (off & kFlightDisableDrag) == 0;
   model.lift = (off & kFlightDisableLift) == 0;
+  // Nathan's kinks are in C_D only; Ferguson et al.'s S clamps bend both.
+  model.breakpoints = options.aero.fit == AeroFit::kNathan ? model.drag
+                                                            : model.drag || model.lift;
   model.spin_decay = (off & kFlightDisableSpinDecay) == 0;
   model.wind = (off & kFlightDisableWind) == 0 && wind.speed_mps > 0.0;
   model.instantaneous_decay =
@@ -545,7 +609,7 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
   double rate = 0.0;
   Derivative(model, y, &f, &rate);
   result.rhs_evaluations = 1;
-  int regime = model.drag ? DragRegime(model, AirSpeed(model, y)) : 0;
+  int regime = model.breakpoints ? DragRegime(model, y) : 0;
 
   double t = 0.0;
   double h_try = options.dt_s;  // DP45 proposal
@@ -608,13 +672,13 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
           t + h, t));
     }
 
-    // Stage 2: drag-regime breakpoints. C_D0(Re) has kinks at re_low and
-    // re_high; a step that crosses one is cut short onto the crossing so no
-    // step integrates across a kink (this keeps RK4 at order 4 and DP45's
-    // error estimate honest).
+    // Stage 2: the fit's breakpoints (Nathan: Re at re_low and re_high;
+    // Ferguson et al.: S at s_min and s_max). A step that crosses one is cut
+    // short onto the crossing so no step integrates across a kink (this keeps
+    // RK4 at order 4 and DP45's error estimate honest).
     bool on_grid = true;
-    if (model.drag) {
-      const int regime_end = DragRegime(model, AirSpeed(model, y_new));
+    if (model.breakpoints) {
+      const int regime_end = DragRegime(model, y_new);
       while (regime_end != regime) {
         const int next = regime + (regime_end > regime ? 1 : -1);
         const double theta =
@@ -626,12 +690,9 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
         const ScalarHermite z{y[kZ], h * f[kZ], y_new[kZ], h * f_new[kZ]};
         if (y_new[kZ] <= 0.0 && z.Value(theta) <= 0.0) break;  // lands first
         // The interpolant straddles the kink, so its crossing is only a first
-        // guess: refine the partial step's length by Newton on the air speed
-        // (d|u|/dt ~ u.a / |u|) until the step ends on the boundary.
-        const double boundary_speed =
-            (std::max(regime, next) == 2 ? model.aero.re_high
-                                         : model.aero.re_low) /
-            model.re_per_speed;
+        // guess: refine the partial step's length by Newton on the piece
+        // variable until the step ends on the boundary.
+        const double boundary = Breakpoint(model, std::max(regime, next) == 2);
         const double h_full = h;
         h = theta * h_full;
         for (int iter = 0;; ++iter) {
@@ -639,13 +700,11 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
           Derivative(model, y_new, &f_new, &rate_new);
           ++result.rhs_evaluations;
           if (iter == kMaxRefinements) break;
-          Vector3d u = y_new.segment<3>(3);
-          if (model.wind) u -= WindAt(model, y_new[kZ]);
-          const double speed = u.norm();
-          const double speed_rate = u.dot(f_new.segment<3>(3)) / speed;
-          if (!(std::abs(speed_rate) > 0.0)) break;
+          const double value = PieceVariable(model, y_new);
+          const double value_rate = PieceVariableRate(model, y_new, f_new);
+          if (!(std::abs(value_rate) > 0.0) || !std::isfinite(value)) break;
           const double h_next = std::clamp(
-              h - (speed - boundary_speed) / speed_rate, 0.0, h_full);
+              h - (value - boundary) / value_rate, 0.0, h_full);
           if (h_next == h || h_next <= 0.0) break;
           h = h_next;
         }

@@ -9,22 +9,48 @@
 //   dw/dt = -w / tau   (spin decay; the axis keeps its direction).
 // Spin parameter S = r w / |u|; Reynolds number Re = rho |u| d / mu.
 //
-// Aerodynamic fit (default): A. M. Nathan, "Trajectory Calculator: Golf
-// Version" (baseball.physics.illinois.edu/trajectory-calculator-golf.html),
-// workbook TrajectoryCalculatorGolf-v2 (2023-11-29, updated 2025-02-14), which
-// draws on Lyu et al., Proceedings 2(6), 238 (2018) (WSU measurements) and
-// P. Dewhurst, The Science of the Perfect Swing (2015) pp. 34-35, with the
-// parameters "optimized for 7 clubs, driver through 5-iron":
-//   C_D = C_D0(Re) + 0.2087217 S,
-//   C_D0 = 1.9451114 for Re <= 0.5e5, 0.1324800 for Re >= 1.0e5, linear in Re
-//          in between (continuous, with kinks at both ends),
-//   C_L = 0.2294096 S^0.4.
-// We read the workbook's formulas through a transcription (a "verification
-// gate source log" stored in a public repository, and a second program that
-// tabulates the same C_D0 points); we did not open the workbook itself.
-// Nathan's sheet evaluates Re from its own air model (Re = 123,638 at 100 mph
-// in its default air); we use Re = rho |u| d / mu from the atmosphere below,
-// so the low-speed drag rise starts at a slightly different speed.
+// Aerodynamic fits (AeroFit):
+// - kFergusonMcNallyMcPhee2022 (default): quadratics in the spin parameter,
+//     C_D = 0.1304 + 0.9287 S - 0.8259 S^2,
+//     C_L = 0.0504 + 1.2031 S - 1.1490 S^2,
+//   from A. Ferguson, W. McNally and J. McPhee, "Golf ball flight dynamics
+//   identified from launch-monitor data", Proceedings of the 14th conference
+//   of the International Sports Engineering Association (ISEA 2022), doi
+//   10.5703/1288284317493: fitted to 1040 measured shots (GCQuad launch
+//   conditions, FlightScope X3 carry and apex, Titleist Pro V1) spanning
+//   driver to wedge, S = 0.02..0.75. We read the coefficients as printed in
+//   a transcription (open-flight/openflight, src/openflight/ballistics.py),
+//   not from the paper itself. Outside the fitted range we do not
+//   extrapolate the parabolas: S is held at 0.75 above it (both C_D and
+//   C_L), C_D is held at its S = 0.02 value below it, and C_L falls
+//   linearly to 0 at S = 0 (a ball without spin has no Magnus lift; the
+//   quadratic's 0.0504 at S = 0 is a regression intercept, not a measured
+//   non-spinning lift). The fit has no Reynolds-number term: it averages
+//   over the Re of real shots (about 0.5e5..2.5e5), so the drag crisis
+//   below Re ~ 0.7e5 is not modelled separately.
+//   With Smits & Smith's spin decay (below), the TrackMan PGA Tour averages
+//   (driver to pitching wedge) are matched to ~2-4 % in carry and ~1 yd in
+//   apex, with landing angles 1-8 deg shallow; docs/golf-flight.md.
+// - kNathan: A. M. Nathan, "Trajectory Calculator: Golf Version"
+//   (baseball.physics.illinois.edu/trajectory-calculator-golf.html),
+//   workbook TrajectoryCalculatorGolf-v2 (2023-11-29, updated 2025-02-14),
+//   which draws on Lyu et al., Proceedings 2(6), 238 (2018) (WSU
+//   measurements) and P. Dewhurst, The Science of the Perfect Swing (2015)
+//   pp. 34-35, with the parameters "optimized for 7 clubs, driver through
+//   5-iron":
+//     C_D = C_D0(Re) + 0.2087217 S,
+//     C_D0 = 1.9451114 for Re <= 0.5e5, 0.1324800 for Re >= 1.0e5, linear in
+//            Re in between (continuous, with kinks at both ends),
+//     C_L = 0.2294096 S^0.4.
+//   We read the workbook's formulas through a transcription (a "verification
+//   gate source log" stored in a public repository, and a second program
+//   that tabulates the same C_D0 points); we did not open the workbook.
+//   Nathan's sheet evaluates Re from its own air model (Re = 123,638 at 100
+//   mph in its default air); we use Re = rho |u| d / mu from the atmosphere
+//   below, so the low-speed drag rise starts at a slightly different speed.
+//   It fits driver carry (273 yd against TrackMan's 275) with too little
+//   lift and drag at once: apex 21 yd against 32, landing 23 deg against 38,
+//   and irons 18-37 yd short; kept for comparison and for games tuned on it.
 // Spin decay: tau = r / (2.0e-5 v) (Smits & Smith, Science and Golf II
 // (1994), as quoted with SI units by A. M. Nathan, "The effect of spin-down on
 // the flight of a baseball" (2008)). Nathan's golf sheet evaluates tau once,
@@ -59,12 +85,15 @@
 //   |err_i| <= tolerance (1 + max(|y_i|, |y_i,new|)) (SI units: m, m/s,
 //   rad/s). `tolerance` is required, in (0, 1e-2]; dt_s is the first trial
 //   step and max_step_s caps the step.
-// Drag-regime breakpoints (both schemes): C_D0(Re) has kinks at re_low and
-// re_high. A step that ends in another regime is cut short onto the
-// crossing (first guess on the step's Hermite interpolant, then Newton on
-// the air speed of the re-taken partial step), so no step integrates across
-// a kink; without this RK4 falls to order ~1-2 on shots that slow through
-// the drag crisis. An RK4 step cut short is followed by the remainder of
+// Fit breakpoints (both schemes): each fit is smooth between two breakpoints
+// of one variable and has kinks at them: Nathan's C_D0(Re) at re_low and
+// re_high (the variable is the air speed), Ferguson et al.'s clamps at S =
+// s_min and s_max (the variable is S). A step that ends in another piece is
+// cut short onto the crossing (first guess on the step's Hermite
+// interpolant, then Newton on the variable of the re-taken partial step), so
+// no step integrates across a kink; without this RK4 falls to order ~1-2 on
+// shots that slow through the drag crisis (Nathan) or whose S passes 0.75
+// near the apex (wedges, Ferguson). An RK4 step cut short is followed by the remainder of
 // its grid interval, so the grid k * dt_s is kept.
 // Landing is the first downward crossing of z = 0: located on the step's
 // cubic Hermite interpolant (bracketed Newton, to 1e-12 s), then refined by
@@ -159,8 +188,22 @@ enum class SpinDecayModel {
   kInstantaneous,  ///< dw/dt = -c |u| w / r (Smits & Smith's law as an ODE)
 };
 
-/// Aerodynamic coefficients; defaults are Nathan's golf fit (see above).
+/// Which published C_D, C_L fit flies the ball (see above).
+enum class AeroFit {
+  kFergusonMcNallyMcPhee2022,  ///< quadratics in S, driver to wedge (default)
+  kNathan,                     ///< C_D0(Re) + k S, C_L = a S^0.4
+};
+
+/// Aerodynamic coefficients. `fit` picks the formulas; each fit reads only
+/// its own fields. Defaults are the published values (see above).
 struct AeroCoefficients {
+  AeroFit fit = AeroFit::kFergusonMcNallyMcPhee2022;
+  // kFergusonMcNallyMcPhee2022: C = c0 + c1 S + c2 S^2 on [s_min, s_max].
+  double cd_c0 = 0.1304, cd_c1 = 0.9287, cd_c2 = -0.8259;  ///< each [-10, 10]
+  double cl_c0 = 0.0504, cl_c1 = 1.2031, cl_c2 = -1.1490;  ///< each [-10, 10]
+  double s_min = 0.02;  ///< lower end of the fitted S range; (0, s_max)
+  double s_max = 0.75;  ///< upper end; (s_min, 10]
+  // kNathan:
   double cd_low = 1.9451114;       ///< C_D0 at Re <= re_low; [0, 10]
   double cd_high = 0.1324800;      ///< C_D0 at Re >= re_high; [0, 10]
   double cd_spin = 0.2087217;      ///< dC_D/dS; [0, 10]
@@ -170,15 +213,18 @@ struct AeroCoefficients {
   double cl_amplitude = 0.2294096; ///< C_L = cl_amplitude S^cl_exponent;
                                    ///< [0, 10]
   double cl_exponent = 0.4;        ///< [0.1, 2]
+  // Both fits (Smits & Smith's spin decay):
   double spin_decay_coefficient = 2.0e-5;  ///< c in tau = r / (c v);
                                            ///< (0, 1e-2]
 };
 
-/// C_D(Re, S) of the fit: piecewise-linear C_D0(Re) plus cd_spin S.
+/// C_D(Re, S) of the fit: Ferguson et al.'s quadratic in S (Re unused), or
+/// Nathan's piecewise-linear C_D0(Re) plus cd_spin S.
 double DragCoefficient(const AeroCoefficients& aero, double reynolds,
                        double spin_parameter);
 
-/// C_L(S) = cl_amplitude S^cl_exponent (0 for S <= 0).
+/// C_L(S) of the fit (0 for S <= 0): Ferguson et al.'s quadratic (linear to
+/// 0 below s_min), or Nathan's cl_amplitude S^cl_exponent.
 double LiftCoefficient(const AeroCoefficients& aero, double spin_parameter);
 
 /// Solver and model options. Defaults: RK4 at 1 ms, full physics.

@@ -1,6 +1,7 @@
 // The real server in-process on an ephemeral loopback port, called through generated stubs.
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <string>
@@ -358,6 +359,88 @@ TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
   const grpc::Status bad = stub->SimulateFlight(Ctx().get(), req, &resp);
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(bad.error_message(), HasSubstr("launch.spin_rpm"));
+}
+
+TEST_F(ServerTest, SimulateSwingLaunchesAndFliesTheBallFromItsImpact) {
+  // The chapter's swing hits a 7-iron: the ball's launch is the library's oblique impact of the
+  // swing's own impact (ground speed, attack angle from the ground velocity), and the flight is
+  // SimulateFlight of that launch, bit for bit.
+  auto stub = v1::Swing::NewStub(channel_);
+  v1::SimulateSwingRequest req;
+  req.mutable_solver()->set_integrator(v1::SWING_INTEGRATOR_RK4);
+  req.mutable_solver()->set_dt_s(0.0025);
+  req.mutable_ball()->set_club("7-iron");
+  req.mutable_ball()->set_face_angle_deg(2);
+  req.mutable_ball()->set_sample_interval_s(0.05);
+  v1::SimulateSwingResponse resp;
+  ASSERT_TRUE(stub->SimulateSwing(Ctx().get(), req, &resp).ok());
+  ASSERT_TRUE(resp.has_impact());
+  ASSERT_TRUE(resp.has_ball());
+  const v1::BallLaunch& ball = resp.ball();
+  EXPECT_EQ(ball.error(), "");
+  EXPECT_EQ(ball.club(), "7-iron");
+  EXPECT_EQ(ball.clubhead_speed_mps(), resp.impact().clubhead_speed_ground_mps());
+  EXPECT_EQ(ball.attack_angle_deg(), resp.impact().clubhead_direction_deg());
+
+  absl::StatusOr<swing::ClubSpec> club = swing::ClubPreset("7-iron");
+  ASSERT_TRUE(club.ok());
+  absl::StatusOr<swing::ImpactResult> hit = swing::SimulateImpact(
+      {.clubhead_speed_mps = ball.clubhead_speed_mps(),
+       .attack_angle_deg = ball.attack_angle_deg(),
+       .face_angle_deg = 2},
+      *club, {});
+  ASSERT_TRUE(hit.ok()) << hit.status();
+  EXPECT_EQ(ball.launch().ball_speed_mps(), hit->launch.ball_speed_mps);
+  EXPECT_EQ(ball.launch().launch_angle_deg(), hit->launch.launch_angle_deg);
+  EXPECT_EQ(ball.launch().spin_rpm(), hit->launch.spin_rpm);
+  EXPECT_EQ(ball.launch().spin_axis_deg(), hit->launch.spin_axis_deg);
+  EXPECT_EQ(ball.smash_factor(), hit->smash_factor);
+  // An open face starts the ball right of the target.
+  EXPECT_GT(ball.launch().launch_direction_deg(), 0.0);
+
+  v1::SimulateFlightRequest flight;
+  *flight.mutable_launch() = ball.launch();
+  flight.set_sample_interval_s(0.05);
+  absl::StatusOr<FlightJob> job = FlightJobFromProto(flight);
+  ASSERT_TRUE(job.ok()) << job.status();
+  absl::StatusOr<swing::FlightResult> direct =
+      swing::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+  ASSERT_TRUE(direct.ok());
+  v1::SimulateFlightResponse expected;
+  FlightResultToProto(*direct, ball.flight().cpu_s(), &expected);
+  EXPECT_EQ(ball.flight().SerializeAsString(), expected.SerializeAsString());
+  EXPECT_GT(ball.flight().carry_m(), 50.0);
+
+  // Without `ball`, no ball.
+  req.clear_ball();
+  ASSERT_TRUE(stub->SimulateSwing(Ctx().get(), req, &resp).ok());
+  EXPECT_FALSE(resp.has_ball());
+}
+
+TEST_F(ServerTest, SimulateSwingRefusesABadBallStrikeNamingTheField) {
+  auto stub = v1::Swing::NewStub(channel_);
+  struct Case {
+    void (*edit)(v1::BallStrike*);
+    const char* field;
+  };
+  const Case cases[] = {
+      {[](v1::BallStrike* b) { b->set_club("putter"); }, "ball.club"},
+      {[](v1::BallStrike* b) { b->set_face_angle_deg(std::nan("")); }, "ball."},
+      {[](v1::BallStrike* b) { b->set_face_angle_deg(80); }, "face_angle"},
+      {[](v1::BallStrike* b) { b->set_cor(1.5); }, "ball.cor"},
+      {[](v1::BallStrike* b) { b->mutable_atmosphere()->set_altitude_m(1e6); },
+       "ball.atmosphere.altitude_m"},
+      {[](v1::BallStrike* b) { b->set_aero_fit(static_cast<v1::AeroFit>(9)); }, "ball.aero_fit"},
+      {[](v1::BallStrike* b) { b->set_sample_interval_s(-1); }, "ball.sample_interval_s"},
+  };
+  for (const Case& c : cases) {
+    v1::SimulateSwingRequest req;
+    c.edit(req.mutable_ball());
+    v1::SimulateSwingResponse resp;
+    const grpc::Status s = stub->SimulateSwing(Ctx().get(), req, &resp);
+    EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << c.field;
+    EXPECT_THAT(s.error_message(), HasSubstr(c.field));
+  }
 }
 
 // Shutdown with a short grace cancels a long call, and the run notices (it polls IsCancelled):

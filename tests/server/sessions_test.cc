@@ -432,6 +432,53 @@ INSTANTIATE_TEST_SUITE_P(
         IntegratorCase{"dp45", v1::SWING_INTEGRATOR_DP45, 0.0, false}),
     [](const ::testing::TestParamInfo<IntegratorCase>& p) { return std::string(p.param.name); });
 
+// A session created with `ball` launches it at each impact: the IMPACT event carries the ball
+// that SimulateSwing's `ball` would give for the same impact (0.1 s flight samples by default in
+// a session), and a bad `ball` creates nothing.
+TEST_F(SessionsTest, ImpactEventCarriesTheLaunchedBallAndItsFlight) {
+  v1::CreateSessionRequest create;
+  create.mutable_ball()->set_club("5-iron");
+  create.mutable_ball()->set_club_path_deg(-3);
+  const v1::CreateSessionResponse s = Create(create);
+  ASSERT_FALSE(s.session_id().empty());
+  absl::StatusOr<sw::SwingRunResult> want = Reference(create, sw::TorqueProgram::Chapter());
+  ASSERT_TRUE(want.ok() && want->impact.has_value());
+
+  FakeSink& sink = NewSink();
+  ASSERT_NE(Watch(WatchReq(s.session_id()), sink), nullptr);
+  ASSERT_TRUE(reg_.Start(StartReq(s)).ok());
+  ASSERT_TRUE(WaitFinished(s.session_id()).ok());
+  ASSERT_TRUE(WaitFor([&] { return GotFinished(sink); }));
+  const std::vector<v1::SwingEvent> impacts = EventsOf(sink.got(), v1::SWING_EVENT_IMPACT);
+  ASSERT_EQ(impacts.size(), 1u);
+  const v1::BallLaunch& got = impacts[0].ball();
+  EXPECT_EQ(got.error(), "");
+  EXPECT_EQ(got.club(), "5-iron");
+
+  v1::BallStrike strike = create.ball();
+  strike.set_sample_interval_s(0.1);
+  absl::StatusOr<StrikeJob> job = StrikeJobFromProto(strike);
+  ASSERT_TRUE(job.ok()) << job.status();
+  v1::BallLaunch expected;
+  LaunchBall(*job, *want->impact, &expected);
+  expected.mutable_flight()->set_cpu_s(got.flight().cpu_s());
+  EXPECT_TRUE(MessageDifferencer::Equals(got, expected)) << got.ShortDebugString();
+  EXPECT_GT(got.flight().carry_m(), 50.0);
+  EXPECT_LT(got.launch().launch_direction_deg(), 0.0);  // an out-to-in path starts it left
+  // 0.1 s samples: about ten a second of flight, plus the landing.
+  EXPECT_NEAR(got.flight().samples_size(), got.flight().flight_time_s() / 0.1 + 2, 1.0);
+
+  v1::CreateSessionRequest bad;
+  bad.mutable_ball()->set_club("driver");
+  bad.mutable_ball()->set_face_angle_deg(std::nan(""));
+  const int before = reg_.stats().sessions;
+  absl::StatusOr<v1::CreateSessionResponse> refused = reg_.Create(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(refused.status().message(), HasSubstr("ball."));
+  EXPECT_EQ(reg_.stats().sessions, before);
+}
+
 // Driven torques (100, -10) then (100, 0) from t = 0.1 s are the chapter's program: with rk4 at
 // one step a tick, the driven swing is the scheduled one, bit for bit. The command is reported
 // when it takes effect, and the driver's stream ends OK after the snapshot carrying ENDED.

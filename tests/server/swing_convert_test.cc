@@ -197,6 +197,11 @@ TEST(FlightConvertTest, CarriesWindEffectsAndAtmosphere) {
   EXPECT_EQ(job->atmosphere.altitude_m, 1600.0);
   EXPECT_EQ(job->options.disabled, swing::kFlightDisableSpinDecay);
   EXPECT_EQ(job->options.sample_interval_s, 0.05);
+  EXPECT_EQ(job->options.aero.fit, swing::AeroFit::kFergusonMcNallyMcPhee2022);  // unset
+  r.set_aero_fit(v1::AERO_FIT_NATHAN);
+  job = FlightJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->options.aero.fit, swing::AeroFit::kNathan);
 }
 
 TEST(FlightConvertTest, RejectsBadInputNamingTheField) {
@@ -213,6 +218,7 @@ TEST(FlightConvertTest, RejectsBadInputNamingTheField) {
       {[](auto* r) { r->set_dt_s(1e-9); }, "dt_s must be finite and in [1e-05, 0.1] s"},
       {[](auto* r) { r->set_sample_interval_s(1e-5); }, "sample_interval_s must be finite and in [0.001, 10] s"},
       {[](auto* r) { r->mutable_disabled_effects()->Add(77); }, "disabled_effects[0]: unknown effect 77"},
+      {[](auto* r) { r->set_aero_fit(static_cast<v1::AeroFit>(9)); }, "aero_fit: unknown fit 9"},
   };
   for (const Case& c : cases) {
     v1::SimulateFlightRequest r = DriverFlight();

@@ -42,6 +42,20 @@ FlightResult Fly(const LaunchConditions& launch, const FlightOptions& options,
   return r.ok() ? *std::move(r) : FlightResult{};
 }
 
+// The PGA Tour pitching wedge (102 mph, 24.2 deg, 9304 rpm): S passes
+// Ferguson et al.'s s_max = 0.75 near the apex, so it exercises that kink.
+LaunchConditions PgaTourPitchingWedge() {
+  return LaunchConditions{.ball_speed_mps = 102 * kMphToMps,
+                          .launch_angle_deg = 24.2,
+                          .spin_rpm = 9304};
+}
+
+// `options` flown with the aerodynamic fit `fit`.
+FlightOptions WithFit(FlightOptions options, AeroFit fit) {
+  options.aero.fit = fit;
+  return options;
+}
+
 FlightOptions Reference() {
   // Dormand-Prince at a tolerance near round-off, small steps: the
   // reference solution the convergence tests compare against.
@@ -125,7 +139,7 @@ TEST(BallFlightSpinDecay, MatchesExponentialClosedForm) {
 TEST(BallFlightAero, CoefficientsFollowNathanFit) {
   // Pure arithmetic on the published constants: round-off only.
   constexpr double kCoeffTol = 1e-12;
-  const AeroCoefficients a;
+  const AeroCoefficients a{.fit = AeroFit::kNathan};
   EXPECT_NEAR(DragCoefficient(a, 2e5, 0.1), 0.1324800 + 0.2087217 * 0.1,
               kCoeffTol);
   EXPECT_NEAR(DragCoefficient(a, 1e4, 0.1), 1.9451114 + 0.2087217 * 0.1,
@@ -143,6 +157,29 @@ TEST(BallFlightAero, CoefficientsFollowNathanFit) {
   EXPECT_NEAR(LiftCoefficient(a, 0.1), 0.2294096 * std::pow(0.1, 0.4),
               kCoeffTol);
   EXPECT_EQ(LiftCoefficient(a, 0.0), 0.0);
+}
+
+TEST(BallFlightAero, CoefficientsFollowFergusonFit) {
+  constexpr double kCoeffTol = 1e-12;
+  const AeroCoefficients a;  // the default fit
+  EXPECT_EQ(a.fit, AeroFit::kFergusonMcNallyMcPhee2022);
+  const auto cd = [](double s) { return 0.1304 + 0.9287 * s - 0.8259 * s * s; };
+  const auto cl = [](double s) { return 0.0504 + 1.2031 * s - 1.1490 * s * s; };
+  // Inside the fitted range; Re plays no part.
+  EXPECT_NEAR(DragCoefficient(a, 2e5, 0.1), cd(0.1), kCoeffTol);
+  EXPECT_EQ(DragCoefficient(a, 1e4, 0.1), DragCoefficient(a, 2e5, 0.1));
+  EXPECT_NEAR(LiftCoefficient(a, 0.3), cl(0.3), kCoeffTol);
+  // Held at S = 0.75 above the range, not extrapolated.
+  EXPECT_NEAR(DragCoefficient(a, 1e5, 2.0), cd(0.75), kCoeffTol);
+  EXPECT_NEAR(LiftCoefficient(a, 2.0), cl(0.75), kCoeffTol);
+  // Below S = 0.02: C_D held, C_L linear to zero (no lift without spin).
+  EXPECT_NEAR(DragCoefficient(a, 1e5, 0.0), cd(0.02), kCoeffTol);
+  EXPECT_NEAR(LiftCoefficient(a, 0.01), 0.5 * cl(0.02), kCoeffTol);
+  EXPECT_EQ(LiftCoefficient(a, 0.0), 0.0);
+  // Continuous at both ends of the range.
+  EXPECT_NEAR(LiftCoefficient(a, 0.02 * (1 - 1e-12)), LiftCoefficient(a, 0.02), 1e-12);
+  EXPECT_NEAR(DragCoefficient(a, 1e5, 0.75 * (1 + 1e-12)), DragCoefficient(a, 1e5, 0.75),
+              1e-12);
 }
 
 TEST(BallFlightAir, StandardAtmosphere) {
@@ -286,11 +323,20 @@ TEST(BallFlightWind, LogarithmicProfile) {
     EXPECT_GT(speed, previous);
     previous = speed;
   }
-  // Near the ground a log-profile headwind is weaker than a uniform one.
-  const FlightResult log_run = Fly(PgaTourDriver(), {}, w);
+  // Below its 10 m reference height a log-profile headwind is weaker than a
+  // uniform one. With drag alone the drag force |u| C_D(r w / |u|) u grows
+  // with the headwind (d/d|u| of |u| C_D(S) is C_D - S C_D'(S) = 0.1304 +
+  // 0.8259 S^2 > 0 for the default fit), so a low shot that never reaches
+  // 10 m carries further in the log profile. (With lift on, a stronger
+  // headwind also lifts more, and the order can go either way.)
+  const LaunchConditions punch{.ball_speed_mps = 45, .launch_angle_deg = 12,
+                               .spin_rpm = 2500};
+  const FlightOptions drag_only{.disabled = kFlightDisableLift};
+  const FlightResult log_run = Fly(punch, drag_only, w);
+  ASSERT_LT(log_run.apex_m, 10.0);
   Wind uniform = w;
   uniform.profile = WindProfile::kUniform;
-  const FlightResult uniform_run = Fly(PgaTourDriver(), {}, uniform);
+  const FlightResult uniform_run = Fly(punch, drag_only, uniform);
   EXPECT_GT(log_run.carry_m, uniform_run.carry_m);
 }
 
@@ -361,18 +407,63 @@ TEST(BallFlightPgaTour, DriverCarryWithinFivePercent) {
   EXPECT_NEAR(r.carry_m / kYardToM, 275.0, kCheckRelTol * 275.0);
 }
 
-// KNOWN MISS, kept visible (run with --gtest_also_run_disabled_tests):
-// Nathan's fit as published gives apex 21.2 yd (-34 %) and a landing angle
-// of 23.4 deg (-38 %) for this shot. See docs/golf-flight.md. We do not tune
-// the coefficients to pass it.
-TEST(BallFlightPgaTour, DISABLED_DriverApexAndLandingAngleWithinFivePercent) {
+TEST(BallFlightPgaTour, DriverApexAndLandingAngleWithinFivePercent) {
+  // The default fit (Ferguson et al. 2022), untuned: 33.1 yd and 37.4 deg.
+  // (Nathan's fit gives 21.2 yd and 23.4 deg here: docs/golf-flight.md.)
   constexpr double kCheckRelTol = 0.05;
   const FlightResult r = Fly(PgaTourDriver(), {});
   EXPECT_NEAR(r.apex_m / kYardToM, 32.0, kCheckRelTol * 32.0);
   EXPECT_NEAR(r.landing_angle_deg, 37.5, kCheckRelTol * 37.5);
 }
 
+TEST(BallFlightPgaTour, EveryClubAgainstTrackManAverages) {
+  // TrackMan's PGA Tour averages (the table published before 2024, as
+  // republished by TrackMan and e.g. Golf Monthly): launch conditions in,
+  // carry, apex and landing angle out, ISA sea-level air, the default fit
+  // untuned. The fit was identified on other shots (Ferguson et al.'s 1040
+  // FlightScope-measured shots), so this is an independent check. Measured:
+  // carry -4.7..+2.7 %, apex -8.4..+4.7 %, landing angle 1.1..7.3 deg
+  // shallow (the fit has no Re term, so the late drag rise near the apex
+  // is missing). Bounds: carry 5 % (PHYSICS.md's "a few %"), apex 10 %,
+  // landing angle 8 deg low to 2 deg high.
+  struct Club {
+    const char* name;
+    double ball_mph, launch_deg, spin_rpm, apex_yd, landing_deg, carry_yd;
+  };
+  const Club clubs[] = {
+      {"driver", 167, 10.9, 2686, 32, 38, 275}, {"3-wood", 158, 9.2, 3655, 30, 43, 243},
+      {"5-wood", 152, 9.4, 4350, 31, 47, 230},  {"hybrid", 146, 10.2, 4437, 29, 47, 225},
+      {"3-iron", 142, 10.4, 4630, 27, 46, 212}, {"4-iron", 137, 11.0, 4836, 28, 48, 203},
+      {"5-iron", 132, 12.1, 5361, 31, 49, 194}, {"6-iron", 127, 14.1, 6231, 30, 50, 183},
+      {"7-iron", 120, 16.3, 7097, 32, 50, 172}, {"8-iron", 115, 18.1, 7998, 31, 50, 160},
+      {"9-iron", 109, 20.4, 8647, 30, 51, 148}, {"wedge", 102, 24.2, 9304, 29, 52, 136}};
+  for (const Club& c : clubs) {
+    const FlightResult r = Fly({.ball_speed_mps = c.ball_mph * kMphToMps,
+                                .launch_angle_deg = c.launch_deg,
+                                .spin_rpm = c.spin_rpm},
+                               {});
+    EXPECT_NEAR(r.carry_m / kYardToM, c.carry_yd, 0.05 * c.carry_yd) << c.name;
+    EXPECT_NEAR(r.apex_m / kYardToM, c.apex_yd, 0.10 * c.apex_yd) << c.name;
+    EXPECT_GE(r.landing_angle_deg, c.landing_deg - 8.0) << c.name;
+    EXPECT_LE(r.landing_angle_deg, c.landing_deg + 2.0) << c.name;
+  }
+}
+
 TEST(BallFlightPgaTour, DriverPinnedModelValues) {
+  // Regression pins of the default fit's output (not physics targets). An
+  // independent Python RK4 integration of the same equations (2-D, 1 ms)
+  // gave 278.598 yd, 33.061 yd, 37.439 deg, 6.74296 s. 1e-7 relative is far
+  // above RK4's error at 1 ms, so only a model change trips it.
+  constexpr double kPinRelTol = 1e-7;
+  const FlightResult r = Fly(PgaTourDriver(), {});
+  EXPECT_NEAR(r.carry_m, 254.751515, kPinRelTol * 254.751515);  // 278.60 yd
+  EXPECT_NEAR(r.apex_m, 30.2309999, kPinRelTol * 30.2309999);    // 33.06 yd
+  EXPECT_NEAR(r.landing_angle_deg, 37.4388155, kPinRelTol * 37.4388155);
+  EXPECT_NEAR(r.flight_time_s, 6.74293046, kPinRelTol * 6.74293046);
+  EXPECT_NEAR(r.landing_speed_mps, 29.716925, kPinRelTol * 29.716925);
+}
+
+TEST(BallFlightPgaTour, NathanDriverPinnedModelValues) {
   // Regression pins of this model's output (not physics targets): carry
   // 249.861065 m (273.25 yd), apex 19.3788727 m (21.19 yd), landing
   // 23.3821721 deg, 5.1432145 s. An independent Python RK4 integration of
@@ -380,7 +471,7 @@ TEST(BallFlightPgaTour, DriverPinnedModelValues) {
   // 1e-7 relative is 100x the 9-digit rounding of the pins and far above
   // RK4's error at 1 ms (~1e-12 m), so only a model change trips it.
   constexpr double kPinRelTol = 1e-7;
-  const FlightResult r = Fly(PgaTourDriver(), {});
+  const FlightResult r = Fly(PgaTourDriver(), WithFit({}, AeroFit::kNathan));
   EXPECT_NEAR(r.carry_m, 249.861065, kPinRelTol * 249.861065);
   EXPECT_NEAR(r.apex_m, 19.3788727, kPinRelTol * 19.3788727);
   EXPECT_NEAR(r.landing_angle_deg, 23.3821721, kPinRelTol * 23.3821721);
@@ -391,8 +482,13 @@ TEST(BallFlightPgaTour, DriverPinnedModelValues) {
 // ---------------------------------------------------------------------------
 // Integrators.
 
+struct ConvergenceCase {
+  LaunchConditions launch;
+  AeroFit fit;
+};
+
 class BallFlightConvergence
-    : public ::testing::TestWithParam<LaunchConditions> {};
+    : public ::testing::TestWithParam<ConvergenceCase> {};
 
 TEST_P(BallFlightConvergence, Rk4IsFourthOrder) {
   // Cross-check the reference: DP45 at 1e-13 against RK4 at 10 us. Both
@@ -401,17 +497,19 @@ TEST_P(BallFlightConvergence, Rk4IsFourthOrder) {
   // Observed order log2(e(h) / e(h/2)) for the classical RK4.
   constexpr double kMinOrder = 3.5;
   constexpr double kMaxOrder = 4.5;
-  const LaunchConditions launch = GetParam();
-  const FlightResult ref = Fly(launch, Reference());
+  const LaunchConditions launch = GetParam().launch;
+  const AeroFit fit = GetParam().fit;
+  const FlightResult ref = Fly(launch, WithFit(Reference(), fit));
   const FlightResult fine =
-      Fly(launch, {.dt_s = 1e-5, .sample_interval_s = 0});
+      Fly(launch, WithFit({.dt_s = 1e-5, .sample_interval_s = 0}, fit));
   ASSERT_NEAR(fine.carry_m, ref.carry_m, kReferenceAgreementM);
 
   // Steps from 100 ms down to 12.5 ms keep the errors (1e-4..1e-11 m) well
   // above the round-off floor (~1e-12 m).
   std::vector<double> errors;
   for (double dt : {0.1, 0.05, 0.025, 0.0125}) {
-    const FlightResult r = Fly(launch, {.dt_s = dt, .sample_interval_s = 0});
+    const FlightResult r =
+        Fly(launch, WithFit({.dt_s = dt, .sample_interval_s = 0}, fit));
     errors.push_back(std::abs(r.carry_m - ref.carry_m));
   }
   for (size_t i = 1; i < errors.size(); ++i) {
@@ -426,15 +524,17 @@ TEST_P(BallFlightConvergence, AdaptiveMeetsItsTolerance) {
   // flight the carry error measured 0.004-0.6 x tol (1 + carry) for
   // tol = 1e-4..1e-10 on these shots, so the bound below is the contract
   // stated for the carry with no extra factor.
-  const LaunchConditions launch = GetParam();
-  const FlightResult ref = Fly(launch, Reference());
+  const LaunchConditions launch = GetParam().launch;
+  const AeroFit fit = GetParam().fit;
+  const FlightResult ref = Fly(launch, WithFit(Reference(), fit));
   int64_t previous_steps = 0;
   for (double tol : {1e-4, 1e-6, 1e-8, 1e-10}) {
     const FlightResult r =
-        Fly(launch, {.integrator = FlightIntegrator::kDormandPrince45,
-                     .tolerance = tol,
-                     .max_step_s = 1.0,
-                     .sample_interval_s = 0});
+        Fly(launch, WithFit({.integrator = FlightIntegrator::kDormandPrince45,
+                             .tolerance = tol,
+                             .max_step_s = 1.0,
+                             .sample_interval_s = 0},
+                            fit));
     EXPECT_LE(std::abs(r.carry_m - ref.carry_m), tol * (1 + ref.carry_m))
         << "tol " << tol;
     EXPECT_LE(std::abs(r.flight_time_s - ref.flight_time_s),
@@ -450,15 +550,22 @@ TEST_P(BallFlightConvergence, LandingTimeAtDefaultStep) {
   // reference; 1e-11 s leaves 100x for rounding and still catches a landing
   // refinement that stops early (the brief asks for ~1e-9 s).
   constexpr double kLandingTimeTolS = 1e-11;
-  const LaunchConditions launch = GetParam();
-  const FlightResult ref = Fly(launch, Reference());
-  EXPECT_NEAR(Fly(launch, {}).flight_time_s, ref.flight_time_s,
+  const LaunchConditions launch = GetParam().launch;
+  const AeroFit fit = GetParam().fit;
+  const FlightResult ref = Fly(launch, WithFit(Reference(), fit));
+  EXPECT_NEAR(Fly(launch, WithFit({}, fit)).flight_time_s, ref.flight_time_s,
               kLandingTimeTolS);
 }
 
-INSTANTIATE_TEST_SUITE_P(Shots, BallFlightConvergence,
-                         ::testing::Values(PgaTourDriver(),
-                                           PgaTourSevenIron()));
+INSTANTIATE_TEST_SUITE_P(
+    Shots, BallFlightConvergence,
+    ::testing::Values(
+        ConvergenceCase{PgaTourDriver(), AeroFit::kFergusonMcNallyMcPhee2022},
+        ConvergenceCase{PgaTourSevenIron(), AeroFit::kFergusonMcNallyMcPhee2022},
+        ConvergenceCase{PgaTourPitchingWedge(),
+                        AeroFit::kFergusonMcNallyMcPhee2022},
+        ConvergenceCase{PgaTourDriver(), AeroFit::kNathan},
+        ConvergenceCase{PgaTourSevenIron(), AeroFit::kNathan}));
 
 TEST(BallFlightOptions, FixedStepWithToleranceIsInvalid) {
   absl::StatusOr<FlightResult> r = SimulateFlight(
@@ -478,7 +585,7 @@ TEST(BallFlightOptions, UnstableStepStopsWithTime) {
   // C_D = 10 at 120 m/s gives a drag rate ~ 2 K C_D v ~ 46 1/s; dt = 0.1 s
   // puts RK4 far outside its stability interval.
   FlightOptions o{.dt_s = 0.1};
-  o.aero.cd_high = 10;
+  o.aero.cd_c0 = 10;
   absl::StatusOr<FlightResult> r = SimulateFlight(
       BallSpec{}, {.ball_speed_mps = 120, .launch_angle_deg = 20}, {}, {}, o);
   ASSERT_EQ(r.status().code(), absl::StatusCode::kOutOfRange);
