@@ -20,7 +20,8 @@ max_mb=${SMOKE_MAX_IMAGE_MB:-150}
 name=sportsim-smoke-$$
 start=$(date +%s)
 
-say() { printf '[smoke %4ss] %s\n' "$(($(date +%s) - start))" "$*"; }
+# Progress and failures go to stderr, so they show even where stdout is captured.
+say() { printf '[smoke %4ss] %s\n' "$(($(date +%s) - start))" "$*" >&2; }
 fail() { say "FAIL: $*"; exit 1; }
 
 as_root() {
@@ -38,6 +39,7 @@ make_base() {
   mirror=$(awk '/^URIs:/ {print $2; exit}' "$sources" 2>/dev/null || true)
   mirror=${mirror:-http://deb.debian.org/debian}
   rootfs=$(mktemp -d /var/tmp/sportsim-bookworm.XXXXXX)
+  trap 'as_root rm -rf "$rootfs"' RETURN
   say "debootstrap bookworm (minbase) from $mirror"
   as_root debootstrap --variant=minbase bookworm "$rootfs" "$mirror" >/dev/null
   if [ -f "$sources" ]; then
@@ -76,6 +78,7 @@ else
   if ! command -v podman >/dev/null || ! command -v runc >/dev/null ||
      ! command -v debootstrap >/dev/null; then
     say "installing podman, runc and debootstrap"
+    as_root apt-get -o DPkg::Lock::Timeout=900 update >/dev/null
     as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
       podman runc debootstrap >/dev/null
   fi
@@ -148,8 +151,8 @@ say "HEALTHCHECK passes"
 expect() {  # expect WHAT PATTERN CLI-ARGS...: run the host CLI, and require PATTERN in its output
   local what=$1 pattern=$2 out
   shift 2
-  out=$("${cli[@]}" "$@" 2>&1) || { echo "$out" | tail -5; fail "host '$what' failed"; }
-  grep -q -- "$pattern" <<<"$out" || { echo "$out" | head -5; fail "host '$what': no $pattern"; }
+  out=$("${cli[@]}" "$@" 2>&1) || { echo "$out" | tail -5 >&2; fail "host '$what' failed"; }
+  grep -q -- "$pattern" <<<"$out" || { echo "$out" | head -5 >&2; fail "host '$what': no $pattern"; }
   printf '%s' "$out"
 }
 expect health SERVING health >/dev/null
@@ -158,8 +161,8 @@ expect "shot simulate" '"t_rest_s"' --format json shot simulate --table pool-9ft
   --ball-speed 8 >/dev/null
 expect "swing simulate" '"carry_m"' --format json swing simulate --integrator rk4 --dt 0.0025 \
   --club driver >/dev/null
-table=$(expect "table create" '"table_id"' --format json table create --table pool-9ft \
-  --rack 8ball)
+expect "table create" '"table_id"' --format json table create --table pool-9ft --rack 8ball \
+  >/dev/null
 say "host CLI: health, info, shot simulate, swing simulate --club driver, table create: ok"
 
 metrics=$(curl -fsS "http://127.0.0.1:$metrics_port/metrics") || fail "/metrics not reachable"
@@ -178,18 +181,31 @@ grep -q "SIGTERM, draining" <<<"$logs" || { echo "$logs"; fail "no SIGTERM drain
 say "SIGTERM: drained and exited 0"
 
 if [ "${SMOKE_COMPOSE:-0}" = 1 ]; then
-  if command -v podman-compose >/dev/null && [ "$engine" = podman ]; then
+  if [ "$engine" = podman ]; then
+    # podman-compose, and the CNI dnsname plugin so the client can resolve "server".
+    if ! command -v podman-compose >/dev/null ||
+       [ ! -e /usr/lib/cni/dnsname ]; then
+      say "installing podman-compose and the CNI dnsname plugin"
+      as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends \
+        podman-compose golang-github-containernetworking-plugin-dnsname >/dev/null
+    fi
     compose=(podman-compose -f "$root/docker/compose.yaml")
-  elif [ "$engine" = docker ] && docker compose version >/dev/null 2>&1; then
+  elif docker compose version >/dev/null 2>&1; then
     compose=(docker compose -f "$root/docker/compose.yaml")
   else
-    fail "SMOKE_COMPOSE=1 but neither podman-compose nor docker compose is installed"
+    fail "SMOKE_COMPOSE=1 needs docker compose with a docker engine"
   fi
-  say "compose: server plus the one-shot client"
-  out=$("${compose[@]}" up --no-build --abort-on-container-exit --exit-code-from client 2>&1) ||
-    { echo "$out"; "${compose[@]}" down >/dev/null 2>&1 || true; fail "compose client failed"; }
-  "${compose[@]}" down >/dev/null 2>&1 || true
-  say "compose: client ran info and shot simulate against the server"
+  say "compose: the server, then the one-shot client against it"
+  compose_down() { "${compose[@]}" down >/dev/null 2>&1 || true; }
+  compose_down
+  "${compose[@]}" up -d --no-build server >/dev/null 2>&1 || { compose_down; fail "compose up"; }
+  # (podman-compose 1.0 has no --exit-code-from; `run` returns the client's status.)
+  out=$("${compose[@]}" run --rm client 2>&1) || { echo "$out" | tail -20 >&2; compose_down;
+                                                   fail "the compose client failed"; }
+  compose_down
+  grep -q '"version"' <<<"$out" && grep -qi 'at rest' <<<"$out" ||
+    { echo "$out" | tail -20 >&2; fail "the compose client's output lacks info or the shot"; }
+  say "compose: the client ran info and shot simulate against the server"
 fi
 
 say "PASS (image build ${build_s}s, total $(($(date +%s) - start))s)"

@@ -2,6 +2,11 @@
 # Prints, one a line, the Debian packages that own the shared libraries the given binaries
 # load: what the runtime image must install, read off the build instead of kept by hand.
 set -euo pipefail
+if missing=$(for bin in "$@"; do ldd "$bin"; done | grep "=> not found"); then
+  echo "runtime-packages: unresolved libraries:" >&2
+  echo "$missing" >&2
+  exit 1
+fi
 for bin in "$@"; do ldd "$bin"; done | awk '$2 == "=>" && $3 ~ /^\// {print $3}' | sort -u |
   while read -r lib; do
     # usrmerge: ldd may name /lib/... while dpkg recorded /usr/lib/..., or the reverse.

@@ -42,6 +42,9 @@ template class BasicWatcher<SwingWatch>;
 
 namespace {
 
+// Flight samples in a session's IMPACT event: at most ~20 a second of flight.
+constexpr double kMinSessionFlightSampleS = 0.05;
+
 using SwingEventPtr = SwingWatcher::EventPtr;
 
 // A tick time and a step end closer than this fraction of a tick period are the same instant.
@@ -245,8 +248,14 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::Create(
   std::optional<StrikeJob> strike;
   if (request.has_ball()) {
     v1::BallStrike ball = request.ball();
-    // A stream event should stay small: ~70 samples for a 7 s flight, not 700.
+    // A stream event should stay small: ~70 samples for a 7 s flight, not 700, and never the
+    // ~580 kB of 1 ms samples (events are kept for resuming watchers).
     if (!ball.has_sample_interval_s()) ball.set_sample_interval_s(0.1);
+    if (!(ball.sample_interval_s() >= kMinSessionFlightSampleS)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "ball.sample_interval_s must be at least %g s in a session, got %g",
+          kMinSessionFlightSampleS, ball.sample_interval_s()));
+    }
     absl::StatusOr<StrikeJob> job = StrikeJobFromProto(ball);
     if (!job.ok()) return job.status();
     strike = *std::move(job);

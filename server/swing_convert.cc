@@ -242,6 +242,8 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
   job.wind.toward_deg = r.wind().toward_deg();
   job.wind.profile = r.wind().logarithmic_profile() ? swing::WindProfile::kLogarithmic
                                                     : swing::WindProfile::kUniform;
+  // (The library names the field: "wind speed_mps must be ...".)
+  if (absl::Status s = swing::ValidateWind(job.wind); !s.ok()) return s;
   for (int i = 0; i < r.disabled_effects_size(); ++i) {
     switch (r.disabled_effects(i)) {
       case v1::FLIGHT_EFFECT_DRAG: job.options.disabled |= swing::kFlightDisableDrag; break;
@@ -307,6 +309,13 @@ absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
   // The flight settings, validated as SimulateFlight would with a placeholder launch.
   *job.flight.mutable_atmosphere() = b.atmosphere();
   *job.flight.mutable_wind() = b.wind();
+  for (int i = 0; i < b.disabled_flight_effects_size(); ++i) {
+    const int e = b.disabled_flight_effects(i);
+    if (e < v1::FLIGHT_EFFECT_DRAG || e > v1::FLIGHT_EFFECT_WIND) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("ball.disabled_flight_effects[%d]: unknown effect %d", i, e));
+    }
+  }
   *job.flight.mutable_disabled_effects() = b.disabled_flight_effects();
   job.flight.set_aero_fit(b.aero_fit());
   if (b.has_sample_interval_s()) job.flight.set_sample_interval_s(b.sample_interval_s());

@@ -316,7 +316,7 @@ absl::Status ValidateAtmosphere(const Atmosphere& air) {
   return CheckFiniteInRange("altitude_m", air.altitude_m, -500, false, 5000, false);
 }
 
-absl::Status ValidateWind(const Wind& wind) {
+absl::Status ValidateWindImpl(const Wind& wind) {
   if (auto s = CheckFiniteInRange("wind speed_mps", wind.speed_mps, 0, false, 50, false);
       !s.ok())
     return s;
@@ -357,6 +357,20 @@ absl::Status ValidateAero(const AeroCoefficients& a) {
   if (auto s = CheckFiniteInRange("aero s_max", a.s_max, 0, true, 10, false); !s.ok()) return s;
   if (auto s = CheckFiniteInRange("aero s_min", a.s_min, 0, true, a.s_max, true); !s.ok())
     return s;
+  if (a.fit == AeroFit::kFergusonMcNallyMcPhee2022) {
+    // C_D over [s_min, s_max] must not go negative: its minimum is at an end or the vertex.
+    double lowest = std::min(DragCoefficient(a, 0, a.s_min), DragCoefficient(a, 0, a.s_max));
+    if (a.cd_c2 != 0.0) {
+      const double vertex = -a.cd_c1 / (2.0 * a.cd_c2);
+      if (vertex > a.s_min && vertex < a.s_max) {
+        lowest = std::min(lowest, DragCoefficient(a, 0, vertex));
+      }
+    }
+    if (lowest < 0.0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "aero cd_c0, cd_c1, cd_c2 give a negative C_D (%g) on [s_min, s_max]", lowest));
+    }
+  }
   if (auto s = CheckFiniteInRange("aero cd_low", a.cd_low, 0, false, 10, false); !s.ok())
     return s;
   if (auto s = CheckFiniteInRange("aero cd_high", a.cd_high, 0, false, 10, false);
@@ -454,6 +468,8 @@ FlightSample MakeSample(double t, const State& y) {
 
 }  // namespace
 
+absl::Status ValidateWind(const Wind& wind) { return ValidateWindImpl(wind); }
+
 absl::StatusOr<AirProperties> ComputeAirProperties(const Atmosphere& air) {
   if (auto s = ValidateAtmosphere(air); !s.ok()) return s;
   const double t_k = air.temperature_c + kKelvinOffset;
@@ -536,7 +552,7 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
   // Validate every input once, here.
   if (auto s = ValidateBallSpec(ball); !s.ok()) return s;
   if (auto s = ValidateLaunchConditions(launch); !s.ok()) return s;
-  if (auto s = ValidateWind(wind); !s.ok()) return s;
+  if (auto s = ValidateWindImpl(wind); !s.ok()) return s;
   if (auto s = ValidateOptions(options); !s.ok()) return s;
   absl::StatusOr<AirProperties> air = ComputeAirProperties(atmosphere);
   if (!air.ok()) return air.status();

@@ -165,6 +165,10 @@ struct Wind {
 /// must be valid (SimulateFlight checks it).
 Eigen::Vector3d WindVelocity(const Wind& wind, double height_m);
 
+/// Checks every Wind field (as SimulateFlight does); InvalidArgument names
+/// the first bad one.
+absl::Status ValidateWind(const Wind& wind);
+
 /// Effects that can be switched off (MuJoCo-style disable bits; 0 = full
 /// physics). A switched-off effect is skipped, not multiplied by zero.
 enum FlightDisable : uint32_t {

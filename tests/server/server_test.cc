@@ -432,6 +432,11 @@ TEST_F(ServerTest, SimulateSwingRefusesABadBallStrikeNamingTheField) {
        "ball.atmosphere.altitude_m"},
       {[](v1::BallStrike* b) { b->set_aero_fit(static_cast<v1::AeroFit>(9)); }, "ball.aero_fit"},
       {[](v1::BallStrike* b) { b->set_sample_interval_s(-1); }, "ball.sample_interval_s"},
+      {[](v1::BallStrike* b) { b->mutable_wind()->set_speed_mps(std::nan("")); },
+       "ball.wind speed_mps"},
+      {[](v1::BallStrike* b) { b->mutable_wind()->set_speed_mps(500); }, "ball.wind speed_mps"},
+      {[](v1::BallStrike* b) { b->add_disabled_flight_effects(static_cast<v1::FlightEffect>(42)); },
+       "ball.disabled_flight_effects[0]"},
   };
   for (const Case& c : cases) {
     v1::SimulateSwingRequest req;

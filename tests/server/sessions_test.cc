@@ -477,6 +477,13 @@ TEST_F(SessionsTest, ImpactEventCarriesTheLaunchedBallAndItsFlight) {
   EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(refused.status().message(), HasSubstr("ball."));
   EXPECT_EQ(reg_.stats().sessions, before);
+  // Fine flight samples would make each IMPACT event (kept for resumes) hundreds of kB.
+  bad.mutable_ball()->set_face_angle_deg(0);
+  bad.mutable_ball()->set_sample_interval_s(0.001);
+  refused = reg_.Create(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(refused.status().message(), HasSubstr("ball.sample_interval_s"));
+  EXPECT_EQ(reg_.stats().sessions, before);
 }
 
 // Driven torques (100, -10) then (100, 0) from t = 0.1 s are the chapter's program: with rk4 at

@@ -219,6 +219,8 @@ TEST(FlightConvertTest, RejectsBadInputNamingTheField) {
       {[](auto* r) { r->set_sample_interval_s(1e-5); }, "sample_interval_s must be finite and in [0.001, 10] s"},
       {[](auto* r) { r->mutable_disabled_effects()->Add(77); }, "disabled_effects[0]: unknown effect 77"},
       {[](auto* r) { r->set_aero_fit(static_cast<v1::AeroFit>(9)); }, "aero_fit: unknown fit 9"},
+      {[](auto* r) { r->mutable_wind()->set_speed_mps(-1); }, "wind speed_mps"},
+      {[](auto* r) { r->mutable_wind()->set_toward_deg(INFINITY); }, "wind toward_deg"},
   };
   for (const Case& c : cases) {
     v1::SimulateFlightRequest r = DriverFlight();
