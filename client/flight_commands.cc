@@ -1,5 +1,8 @@
 // `sportsim flight ...`
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <string>
@@ -10,14 +13,17 @@
 #include "absl/flags/declare.h"
 #include "absl/flags/flag.h"
 #include "absl/strings/numbers.h"
+#include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
 #include "client/swing_flags.h"
+#include "client/table_svg.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
 // Shared with `swing simulate` (defined in swing_commands.cc).
 ABSL_DECLARE_FLAG(std::optional<double>, dt);
 ABSL_DECLARE_FLAG(std::vector<std::string>, disable);
+ABSL_DECLARE_FLAG(std::string, svg);
 
 ABSL_FLAG(std::optional<double>, ball_speed, std::nullopt, "Ball speed at launch (m/s)");
 ABSL_FLAG(std::optional<double>, launch_deg, std::nullopt, "Launch angle above the horizontal (deg)");
@@ -119,6 +125,58 @@ void PrintCsv(const v1::SimulateFlightResponse& f) {
   }
 }
 
+// The trajectory as two views sharing the downrange axis: the side view (height over
+// downrange) above the top view (lateral over downrange, + right drawn downward as on a map
+// seen from behind the golfer), each at its own scale so a 30 m apex and a 5 m curve both
+// show, with the carry, apex and landing written under them.
+std::string FlightSvg(const v1::SimulateFlightResponse& f, const std::string& title) {
+  constexpr double kWidth = 900, kPlotW = 820, kLeft = 50, kSideTop = 50, kSideH = 220;
+  constexpr double kTopTop = 330, kTopH = 160;
+  double x_max = 1, z_max = 1, y_max = 1;
+  for (const v1::FlightSample& s : f.samples()) {
+    x_max = std::max(x_max, s.x_m());
+    z_max = std::max(z_max, s.z_m());
+    y_max = std::max(y_max, std::abs(s.y_m()));
+  }
+  const double sx = kPlotW / x_max;
+  const auto px = [&](double x) { return kLeft + x * sx; };
+  const auto side_y = [&](double z) { return kSideTop + kSideH - z * kSideH / z_max; };
+  // Left of the target line (y > 0) is drawn up, right (y < 0) down.
+  const auto top_y = [&](double y) { return kTopTop + kTopH / 2 - y * (kTopH / 2) / y_max; };
+  std::string side, top;
+  for (const v1::FlightSample& s : f.samples()) {
+    side += absl::StrFormat("%.1f,%.1f ", px(s.x_m()), side_y(s.z_m()));
+    top += absl::StrFormat("%.1f,%.1f ", px(s.x_m()), top_y(s.y_m()));
+  }
+  std::string out = absl::StrFormat(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"560\" "
+      "font-family=\"sans-serif\" font-size=\"13\">\n"
+      "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n"
+      "<text x=\"%.0f\" y=\"25\">%s</text>\n",
+      kWidth, kLeft, SvgEscape(title));
+  // Side view: ground line, apex height, trajectory.
+  out += absl::StrFormat(
+      "<text x=\"%.0f\" y=\"%.0f\">side view (height %.1f m at the apex)</text>\n"
+      "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#6a6\"/>\n"
+      "<polyline points=\"%s\" fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\"/>\n",
+      kLeft, kSideTop - 5, f.apex_m(), px(0), side_y(0), px(x_max), side_y(0), side);
+  // Top view: the target line, trajectory.
+  out += absl::StrFormat(
+      "<text x=\"%.0f\" y=\"%.0f\">top view (lateral scale %.1f m to the edge; right of the "
+      "target line drawn down)</text>\n"
+      "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\" "
+      "stroke-dasharray=\"6 4\"/>\n"
+      "<polyline points=\"%s\" fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\"/>\n",
+      kLeft, kTopTop - 10, y_max, px(0), top_y(0), px(x_max), top_y(0), top);
+  out += absl::StrFormat(
+      "<text x=\"%.0f\" y=\"540\">carry %.1f m (%.1f yd), apex %.1f m, flight %.2f s, "
+      "landing %.1f deg at %.1f m/s, %.1f m %s</text>\n</svg>\n",
+      kLeft, f.carry_m(), f.carry_m() / kMetresPerYard, f.apex_m(), f.flight_time_s(),
+      f.landing_angle_deg(), f.landing_speed_mps(), std::abs(f.lateral_m()),
+      f.lateral_m() >= 0 ? "right" : "left");
+  return out;
+}
+
 int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   if (!args.empty()) return UsageError("flight simulate takes flags only, got '" + args[0] + "'");
   v1::SimulateFlightRequest request;
@@ -127,6 +185,14 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   v1::SimulateFlightResponse response;
   const grpc::Status status = stub->SimulateFlight(ctx.NewCall().get(), request, &response);
   if (!status.ok()) return ReportRpcError(status);
+  if (const std::string svg = absl::GetFlag(FLAGS_svg); !svg.empty()) {
+    const v1::LaunchConditions& l = request.launch();
+    std::ofstream out(svg);
+    out << FlightSvg(response, absl::StrFormat("%.1f m/s, launch %.1f deg, %.0f rpm, axis %.1f deg",
+                                               l.ball_speed_mps(), l.launch_angle_deg(),
+                                               l.spin_rpm(), l.spin_axis_deg()));
+    if (!out) return UsageError("cannot write --svg file '" + svg + "'");
+  }
   return PrintResponse(ctx, response, PrintCsv, PrintFlightText);
 }
 

@@ -56,7 +56,7 @@ Commands:
       --ball-speed MPS --launch-deg DEG --spin-rpm RPM  [--spin-axis-deg DEG]
       [--launch-direction-deg DEG] [--wind MPS[,TOWARD_DEG[,log]]] [--temperature-c C]
       [--pressure-pa PA] [--humidity F] [--altitude-m M] [--dt S] [--sample-interval S]
-      [--disable drag,lift,spin_decay,wind] [--aero ferguson2022|nathan]
+      [--disable drag,lift,spin_decay,wind] [--aero ferguson2022|nathan] [--svg FILE]
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
       --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
       [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]

@@ -109,6 +109,16 @@ class CliAgainstServer(unittest.TestCase):
                 "50", "--launch-deg", "20", "--spin-rpm", "5000")
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertTrue(r.stdout.startswith("t_s,x_m,y_m,z_m,"))
+        with tempfile.TemporaryDirectory() as d:
+            svg = os.path.join(d, "flight.svg")
+            r = cli(self.server.address, "flight", "simulate", "--ball-speed", "60",
+                    "--launch-deg", "14", "--spin-rpm", "4000", "--spin-axis-deg", "10",
+                    "--svg", svg)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(svg) as f:
+                text = f.read()
+            self.assertEqual(text.count("<polyline"), 2)  # side and top views
+            self.assertIn("right</text>", text)  # the landing, right of the target line
         r = cli(self.server.address, "flight", "simulate", "--ball-speed", "50")
         self.assertEqual(r.returncode, 64)
         self.assertIn("needs --ball-speed, --launch-deg and --spin-rpm", r.stderr)
