@@ -306,9 +306,8 @@ absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
       !i.ok()) {
     return PrefixStatus("ball.", i.status());
   }
-  // The flight settings, validated as SimulateFlight would with a placeholder launch.
-  *job.flight.mutable_atmosphere() = b.atmosphere();
-  *job.flight.mutable_wind() = b.wind();
+  // The flight settings, validated as SimulateFlight's request would be, with a placeholder
+  // launch that each impact replaces.
   for (int i = 0; i < b.disabled_flight_effects_size(); ++i) {
     const int e = b.disabled_flight_effects(i);
     if (e < v1::FLIGHT_EFFECT_DRAG || e > v1::FLIGHT_EFFECT_WIND) {
@@ -316,14 +315,16 @@ absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
           absl::StrFormat("ball.disabled_flight_effects[%d]: unknown effect %d", i, e));
     }
   }
-  *job.flight.mutable_disabled_effects() = b.disabled_flight_effects();
-  job.flight.set_aero_fit(b.aero_fit());
-  if (b.has_sample_interval_s()) job.flight.set_sample_interval_s(b.sample_interval_s());
-  v1::SimulateFlightRequest probe_flight = job.flight;
-  probe_flight.mutable_launch()->set_ball_speed_mps(60.0);
-  if (absl::StatusOr<FlightJob> f = FlightJobFromProto(probe_flight); !f.ok()) {
-    return PrefixStatus("ball.", f.status());
-  }
+  v1::SimulateFlightRequest flight;
+  *flight.mutable_atmosphere() = b.atmosphere();
+  *flight.mutable_wind() = b.wind();
+  *flight.mutable_disabled_effects() = b.disabled_flight_effects();
+  flight.set_aero_fit(b.aero_fit());
+  if (b.has_sample_interval_s()) flight.set_sample_interval_s(b.sample_interval_s());
+  flight.mutable_launch()->set_ball_speed_mps(60.0);
+  absl::StatusOr<FlightJob> flight_job = FlightJobFromProto(flight);
+  if (!flight_job.ok()) return PrefixStatus("ball.", flight_job.status());
+  job.flight = *std::move(flight_job);
   return job;
 }
 
@@ -351,16 +352,11 @@ void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::Ball
   out->set_backspin_rpm(hit->backspin_rpm);
   out->set_sidespin_rpm(hit->sidespin_rpm);
   out->set_spin_loft_deg(hit->spin_loft_deg);
-  v1::SimulateFlightRequest request = job.flight;
-  *request.mutable_launch() = *l;
-  absl::StatusOr<FlightJob> flight = FlightJobFromProto(request);
-  if (!flight.ok()) {
-    out->set_error(absl::StrCat("flight: ", flight.status().message()));
-    return;
-  }
+  FlightJob flight = job.flight;
+  flight.launch = hit->launch;  // SimulateFlight validates it
   const double cpu0 = ThreadCpuSeconds();
   absl::StatusOr<swing::FlightResult> result = swing::SimulateFlight(
-      flight->ball, flight->launch, flight->atmosphere, flight->wind, flight->options);
+      flight.ball, flight.launch, flight.atmosphere, flight.wind, flight.options);
   const double cpu_s = ThreadCpuSeconds() - cpu0;
   if (!result.ok()) {
     out->set_error(absl::StrCat("flight: ", result.status().message()));

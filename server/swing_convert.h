@@ -19,12 +19,21 @@
 
 namespace sportsim::server {
 
-/// A validated BallStrike: the club and face, and the flight settings (its launch is filled in
-/// from the impact).
+/// Everything a SimulateFlightRequest asks for, validated (field names in errors are the
+/// proto's: "launch.spin_rpm", "atmosphere.altitude_m", "dt_s").
+struct FlightJob {
+  swing::BallSpec ball;
+  swing::LaunchConditions launch;
+  swing::Atmosphere atmosphere;
+  swing::Wind wind;
+  swing::FlightOptions options;
+};
+/// A validated BallStrike: the club and face, and the flight settings, checked once; each
+/// impact fills in the delivery's speed and attack angle and the flight's launch.
 struct StrikeJob {
   swing::ClubSpec club;
-  swing::ClubDelivery delivery;  // speed and attack angle come from the swing's impact
-  v1::SimulateFlightRequest flight;
+  swing::ClubDelivery delivery;
+  FlightJob flight;
 };
 
 /// Everything a SimulateSwingRequest asks for, validated.
@@ -57,15 +66,6 @@ void ImpactToProto(const swing::SwingSample& s, v1::SwingImpact* out);
 void SwingResultToProto(const swing::SwingRunResult& result, double cpu_s,
                         v1::SimulateSwingResponse* out);
 
-/// Everything a SimulateFlightRequest asks for, validated (field names in errors are the
-/// proto's: "launch.spin_rpm", "atmosphere.altitude_m", "dt_s").
-struct FlightJob {
-  swing::BallSpec ball;
-  swing::LaunchConditions launch;
-  swing::Atmosphere atmosphere;
-  swing::Wind wind;
-  swing::FlightOptions options;
-};
 absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& request);
 void FlightResultToProto(const swing::FlightResult& result, double cpu_s,
                          v1::SimulateFlightResponse* out);

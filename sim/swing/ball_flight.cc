@@ -263,7 +263,7 @@ double Breakpoint(const Model& model, bool upper) {
 // Which piece of the fit applies: 0 (at or below the lower breakpoint), 1
 // (between), 2 (at or above the upper one). Mirrors the branches of
 // DragCoefficient and LiftCoefficient.
-int DragRegime(const Model& model, const State& y) {
+int FitPiece(const Model& model, const State& y) {
   const double v = PieceVariable(model, y);
   if (v <= Breakpoint(model, false)) return 0;
   return v >= Breakpoint(model, true) ? 2 : 1;
@@ -284,7 +284,7 @@ double RegimeCrossing(const Model& model, const State& y0, const State& f0,
                       const State& y1, const State& f1, double h, bool upward,
                       int target) {
   const auto reached = [&](double theta) {
-    const int r = DragRegime(model, Hermite(y0, f0, y1, f1, h, theta));
+    const int r = FitPiece(model, Hermite(y0, f0, y1, f1, h, theta));
     return upward ? r >= target : r <= target;
   };
   double lo = 0.0, hi = 1.0;
@@ -316,7 +316,9 @@ absl::Status ValidateAtmosphere(const Atmosphere& air) {
   return CheckFiniteInRange("altitude_m", air.altitude_m, -500, false, 5000, false);
 }
 
-absl::Status ValidateWindImpl(const Wind& wind) {
+}  // namespace
+
+absl::Status ValidateWind(const Wind& wind) {
   if (auto s = CheckFiniteInRange("wind speed_mps", wind.speed_mps, 0, false, 50, false);
       !s.ok())
     return s;
@@ -339,6 +341,8 @@ absl::Status ValidateWindImpl(const Wind& wind) {
       "wind profile must be kUniform or kLogarithmic, got %d",
       static_cast<int>(wind.profile)));
 }
+
+namespace {
 
 absl::Status ValidateAero(const AeroCoefficients& a) {
   if (a.fit != AeroFit::kFergusonMcNallyMcPhee2022 && a.fit != AeroFit::kNathan) {
@@ -468,8 +472,6 @@ FlightSample MakeSample(double t, const State& y) {
 
 }  // namespace
 
-absl::Status ValidateWind(const Wind& wind) { return ValidateWindImpl(wind); }
-
 absl::StatusOr<AirProperties> ComputeAirProperties(const Atmosphere& air) {
   if (auto s = ValidateAtmosphere(air); !s.ok()) return s;
   const double t_k = air.temperature_c + kKelvinOffset;
@@ -552,7 +554,7 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
   // Validate every input once, here.
   if (auto s = ValidateBallSpec(ball); !s.ok()) return s;
   if (auto s = ValidateLaunchConditions(launch); !s.ok()) return s;
-  if (auto s = ValidateWindImpl(wind); !s.ok()) return s;
+  if (auto s = ValidateWind(wind); !s.ok()) return s;
   if (auto s = ValidateOptions(options); !s.ok()) return s;
   absl::StatusOr<AirProperties> air = ComputeAirProperties(atmosphere);
   if (!air.ok()) return air.status();
@@ -625,7 +627,7 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
   double rate = 0.0;
   Derivative(model, y, &f, &rate);
   result.rhs_evaluations = 1;
-  int regime = model.breakpoints ? DragRegime(model, y) : 0;
+  int regime = model.breakpoints ? FitPiece(model, y) : 0;
 
   double t = 0.0;
   double h_try = options.dt_s;  // DP45 proposal
@@ -694,7 +696,7 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
     // RK4 at order 4 and DP45's error estimate honest).
     bool on_grid = true;
     if (model.breakpoints) {
-      const int regime_end = DragRegime(model, y_new);
+      const int regime_end = FitPiece(model, y_new);
       while (regime_end != regime) {
         const int next = regime + (regime_end > regime ? 1 : -1);
         const double theta =
