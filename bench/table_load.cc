@@ -22,7 +22,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/synchronization/mutex.h"
-#include "server/server_app.h"
+#include "server/app/server_app.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
 ABSL_FLAG(int, tables, 1000, "Tables, each kept moving");

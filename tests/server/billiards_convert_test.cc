@@ -1,4 +1,4 @@
-#include "server/billiards_convert.h"
+#include "server/billiards/convert.h"
 
 #include <algorithm>
 #include <cmath>

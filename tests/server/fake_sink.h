@@ -11,7 +11,7 @@
 
 #include "absl/status/status.h"
 #include "absl/synchronization/mutex.h"
-#include "server/watcher.h"
+#include "server/world/watcher.h"
 
 namespace sportsim::server {
 

@@ -13,7 +13,7 @@
 #include "gmock/gmock.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "gtest/gtest.h"
-#include "server/server_app.h"
+#include "server/app/server_app.h"
 
 namespace sportsim::server {
 namespace {

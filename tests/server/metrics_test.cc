@@ -15,7 +15,7 @@
 #include "absl/strings/str_format.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/server_app.h"
+#include "server/app/server_app.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 

@@ -1,7 +1,7 @@
 // The swing-session registry without a network: validation, the scheduled and driven swings
 // against SimulateSwing bit for bit, refused and late torque commands, realism, tokens, reset,
 // stalled and vanished readers, delete, shutdown and resume, through fake sinks.
-#include "server/sessions.h"
+#include "server/swing/session_world.h"
 
 #include <google/protobuf/util/message_differencer.h>
 
@@ -22,7 +22,7 @@
 #include "absl/strings/str_format.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/swing_convert.h"
+#include "server/swing/convert.h"
 #include "sim/swing/swing_simulation.h"
 #include "sim/swing/torque_program.h"
 #include "tests/server/fake_sink.h"

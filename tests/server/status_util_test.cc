@@ -1,4 +1,4 @@
-#include "server/status_util.h"
+#include "server/rpc/status.h"
 
 #include "gtest/gtest.h"
 

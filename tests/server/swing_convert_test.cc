@@ -1,4 +1,4 @@
-#include "server/swing_convert.h"
+#include "server/swing/convert.h"
 
 #include <cmath>
 #include <limits>

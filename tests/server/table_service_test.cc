@@ -9,7 +9,7 @@
 
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/server_app.h"
+#include "server/app/server_app.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
 namespace sportsim::server {

@@ -1,6 +1,6 @@
 // The table registry without a network: seats and turns, validation, the scheduler, and the
 // watcher protocol (latest wins, events never lost, resync, resume) through fake sinks.
-#include "server/tables.h"
+#include "server/billiards/table_world.h"
 
 #include <algorithm>
 #include <atomic>
@@ -10,7 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
-#include "server/billiards_convert.h"
+#include "server/billiards/convert.h"
 #include "tests/server/fake_sink.h"
 #include "sim/billiards/referee.h"
 #include "sim/billiards/shot.h"

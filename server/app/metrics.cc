@@ -1,4 +1,4 @@
-#include "server/metrics.h"
+#include "server/app/metrics.h"
 
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/support/server_interceptor.h>
@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "absl/strings/str_format.h"
-#include "server/scheduler.h"
-#include "server/sessions.h"
-#include "server/tables.h"
-#include "server/world.h"
+#include "server/world/scheduler.h"
+#include "server/swing/session_world.h"
+#include "server/billiards/table_world.h"
+#include "server/world/world.h"
 
 namespace sportsim::server {
 

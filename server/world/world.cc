@@ -1,4 +1,4 @@
-#include "server/world.h"
+#include "server/world/world.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,40 @@
 
 #include "absl/strings/str_format.h"
 #include "absl/synchronization/mutex.h"
-#include "server/billiards_convert.h"
 
 namespace sportsim::server {
+
+std::string Quote(std::string_view value) {
+  constexpr size_t kMax = 24;
+  std::string out = "\"";
+  for (size_t i = 0; i < value.size() && i < kMax; ++i) {
+    const unsigned char c = static_cast<unsigned char>(value[i]);
+    out += (c >= 0x20 && c < 0x7f && c != '"' && c != '\\') ? static_cast<char>(c) : '?';
+  }
+  out += value.size() > kMax ? "\"..." : "\"";
+  return out;
+}
+
+absl::Status CheckId(std::string_view field, const std::string& id) {
+  if (id.empty() || id.size() > 32) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s must be 1 to 32 characters, got %d: %s", field, id.size(), Quote(id)));
+  }
+  for (const char c : id) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == '-';
+    if (!ok) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s may hold only letters, digits, '.', '_' and '-', got %s", field, Quote(id)));
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::Status PrefixStatus(std::string_view prefix, const absl::Status& s) {
+  if (s.ok()) return s;
+  return absl::Status(s.code(), absl::StrFormat("%s%s", prefix, s.message()));
+}
 
 std::string RandomHex(int bytes) {
   static absl::Mutex mu(absl::kConstInit);

@@ -1,4 +1,4 @@
-#include "server/billiards_convert.h"
+#include "server/billiards/convert.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "server/status_util.h"
+#include "server/world/world.h"
 #include "sim/billiards/rack.h"
 #include "sim/core/check.h"
 #include "sim/core/units.h"
@@ -25,14 +25,6 @@ std::string DefaultRack(std::string_view preset) {
 }
 
 }  // namespace
-
-absl::Status CheckId(std::string_view field, const std::string& id) {
-  if (id.empty() || id.size() > 32) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("%s must be 1 to 32 characters, got \"%s\"", field, id.substr(0, 40)));
-  }
-  return absl::OkStatus();
-}
 
 absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
   const std::string preset = setup.preset().empty() ? "pool-9ft" : setup.preset();

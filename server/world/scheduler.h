@@ -15,7 +15,7 @@
 
 #include "absl/base/thread_annotations.h"
 #include "absl/synchronization/mutex.h"
-#include "server/watcher.h"
+#include "server/world/watcher.h"
 
 namespace sportsim::server {
 

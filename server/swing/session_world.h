@@ -29,8 +29,8 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
-#include "server/scheduler.h"
-#include "server/watcher.h"
+#include "server/world/scheduler.h"
+#include "server/world/watcher.h"
 #include "sim/swing/swing_simulation.h"
 #include "sportsim/v1/swing.pb.h"
 

@@ -10,9 +10,9 @@
 
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
-#include "server/metrics.h"
-#include "server/sessions.h"
-#include "server/tables.h"
+#include "server/app/metrics.h"
+#include "server/swing/session_world.h"
+#include "server/billiards/table_world.h"
 
 namespace grpc {
 class Server;

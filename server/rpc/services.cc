@@ -1,15 +1,15 @@
-#include "server/services.h"
+#include "server/rpc/services.h"
 
 #include <google/protobuf/stubs/common.h>
 #include <grpcpp/grpcpp.h>
 
-#include "server/billiards_convert.h"
-#include "server/status_util.h"
-#include "server/sessions.h"
-#include "server/tables.h"
+#include "server/billiards/convert.h"
+#include "server/rpc/status.h"
+#include "server/swing/session_world.h"
+#include "server/billiards/table_world.h"
 #include "sim/billiards/shot.h"
 #include "sim/core/cpu_clock.h"
-#include "server/swing_convert.h"
+#include "server/swing/convert.h"
 #include "sim/swing/swing_simulation.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"

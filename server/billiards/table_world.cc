@@ -1,15 +1,14 @@
-#include "server/tables.h"
+#include "server/billiards/table_world.h"
 
 #include <algorithm>
 #include <cmath>
 #include <utility>
 
 #include "absl/strings/str_format.h"
-#include "server/billiards_convert.h"
-#include "server/event_log.h"
-#include "server/status_util.h"
-#include "server/watcher_impl.h"
-#include "server/world.h"
+#include "server/billiards/convert.h"
+#include "server/world/event_log.h"
+#include "server/world/watcher_impl.h"
+#include "server/world/world.h"
 #include "sim/billiards/cue.h"
 #include "sim/billiards/engine.h"
 #include "sim/billiards/referee.h"

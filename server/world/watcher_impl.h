@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <utility>
 
-#include "server/watcher.h"
+#include "server/world/watcher.h"
 
 namespace sportsim::server {
 

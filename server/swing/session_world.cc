@@ -1,4 +1,4 @@
-#include "server/sessions.h"
+#include "server/swing/session_world.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,12 +7,10 @@
 #include <utility>
 
 #include "absl/strings/str_format.h"
-#include "server/billiards_convert.h"
-#include "server/event_log.h"
-#include "server/status_util.h"
-#include "server/swing_convert.h"
-#include "server/watcher_impl.h"
-#include "server/world.h"
+#include "server/world/event_log.h"
+#include "server/swing/convert.h"
+#include "server/world/watcher_impl.h"
+#include "server/world/world.h"
 #include "sim/swing/realism.h"
 
 namespace sportsim::server {

@@ -22,9 +22,6 @@ namespace sportsim::server {
 /// Most balls a table may hold (snooker has 22).
 inline constexpr int kMaxBalls = 64;
 
-/// OK for an id of 1 to 32 characters; else InvalidArgument naming `field`.
-absl::Status CheckId(std::string_view field, const std::string& id);
-
 /// A table built from a TableSetup: model and balls at rest.
 struct TableBuild {
   billiards::TableModel model;

@@ -1,4 +1,4 @@
-#include "server/status_util.h"
+#include "server/rpc/status.h"
 
 #include <string>
 
@@ -32,11 +32,6 @@ grpc::StatusCode ToGrpcCode(absl::StatusCode code) {
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(ToGrpcCode(status.code()), std::string(status.message()));
-}
-
-absl::Status PrefixStatus(std::string_view prefix, const absl::Status& s) {
-  if (s.ok()) return s;
-  return absl::Status(s.code(), absl::StrFormat("%s%s", prefix, s.message()));
 }
 
 }  // namespace sportsim::server

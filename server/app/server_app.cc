@@ -1,4 +1,4 @@
-#include "server/server_app.h"
+#include "server/app/server_app.h"
 
 #include <netdb.h>
 #include <sys/socket.h>
@@ -17,7 +17,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "server/services.h"
+#include "server/rpc/services.h"
 
 namespace sportsim::server {
 namespace {

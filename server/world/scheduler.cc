@@ -1,4 +1,4 @@
-#include "server/scheduler.h"
+#include "server/world/scheduler.h"
 
 #include <time.h>
 

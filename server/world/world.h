@@ -19,6 +19,18 @@ namespace sportsim::server {
 
 using SteadyClock = std::chrono::steady_clock;
 
+/// The same status with its message prefixed by the proto path it concerns ("table.rack: ",
+/// "solver."); OK stays OK.
+absl::Status PrefixStatus(std::string_view prefix, const absl::Status& s);
+
+/// OK for a client-given id (ball, seat name) of 1 to 32 characters, each a letter, a digit,
+/// '.', '_' or '-'; else InvalidArgument naming `field` and quoting at most a short prefix.
+absl::Status CheckId(std::string_view field, const std::string& id);
+
+/// At most the first 24 bytes of `value`, printable ASCII only, for quoting client input in an
+/// error message (never the whole input: messages travel in gRPC's metadata).
+std::string Quote(std::string_view value);
+
 /// `bytes` random bytes as lower-case hex, from std::random_device.
 std::string RandomHex(int bytes);
 

@@ -1,4 +1,4 @@
-#include "server/watcher.h"
+#include "server/world/watcher.h"
 
 #include <algorithm>
 #include <cmath>

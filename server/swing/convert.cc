@@ -1,4 +1,4 @@
-#include "server/swing_convert.h"
+#include "server/swing/convert.h"
 
 #include <cmath>
 #include <string_view>
@@ -6,7 +6,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "server/status_util.h"
+#include "server/world/world.h"
 #include "sim/core/cpu_clock.h"
 #include "sim/core/units.h"
 
