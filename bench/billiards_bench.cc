@@ -21,13 +21,13 @@ const char* const kScenes[] = {"straight", "cut", "bank", "break"};
 // without orientation tracking.
 SolverOptions Scheme(int64_t k) {
   if (k == 3) return {.engine = Engine::kEvent};
-  if (k == 4) return {.engine = Engine::kEvent, .disabled = kEffectDrag | kEffectOrientation};
+  if (k == 4) return {.engine = Engine::kEvent, .effects = kEffectDisableOrientation};
   return {.engine = Engine::kStepped, .integrator = static_cast<Integrator>(k),
           .dt_s = 1.0 / 960.0};
 }
 std::string SchemeName(const SolverOptions& o) {
   if (o.engine == Engine::kEvent) {
-    return (o.disabled & kEffectOrientation) != 0 ? "event, no orientation" : "event";
+    return (o.effects & kEffectDisableOrientation) != 0 ? "event, no orientation" : "event";
   }
   return "stepped " + std::string(IntegratorName(o.integrator));
 }
@@ -54,12 +54,12 @@ void BM_EightBallBreak(benchmark::State& state) {
   if (!ApplyStrike(m, 0, {.speed_mps = 8.0, .ball_speed = true}, 0, &s).ok()) std::abort();
   const bool event = state.range(0) == 0;
   const double dt = event ? 1.0 / 960.0 : 1.0 / static_cast<double>(state.range(0));
-  const uint32_t disabled = static_cast<uint32_t>(state.range(1));
+  const uint32_t effects = static_cast<uint32_t>(state.range(1));
   const SolverOptions o{.engine = event ? Engine::kEvent : Engine::kStepped, .dt_s = dt,
-                        .disabled = disabled};
-  state.SetLabel(event ? absl::StrFormat("event, disabled 0x%x", disabled)
-                       : absl::StrFormat("stepped rk4 dt 1/%d, disabled 0x%x", state.range(0),
-                                         disabled));
+                        .effects = effects};
+  state.SetLabel(event ? absl::StrFormat("event, effects 0x%x", effects)
+                       : absl::StrFormat("stepped rk4 dt 1/%d, effects 0x%x", state.range(0),
+                                         effects));
   int64_t events = 0;
   for (auto _ : state) {
     absl::StatusOr<ShotResult> r = SimulateShot(m, o, s, {});
@@ -73,11 +73,11 @@ void BM_EightBallBreak(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_EightBallBreak)
-    ->Args({0, kEffectDrag})
-    ->Args({0, kEffectDrag | kEffectOrientation})
-    ->Args({120, kEffectDrag})
-    ->Args({960, kEffectDrag})
-    ->Args({960, kEffectDrag | kEffectOrientation})
+    ->Args({0, 0})
+    ->Args({0, kEffectDisableOrientation})
+    ->Args({120, 0})
+    ->Args({960, 0})
+    ->Args({960, kEffectDisableOrientation})
     ->Args({960, 0})
     ->Unit(benchmark::kMicrosecond);
 
@@ -95,11 +95,11 @@ void BM_RandomShots(benchmark::State& state) {
                            .phi_rad = 6.283185307179586 * unit(rng),
                            .theta_rad = 0.2 * unit(rng), .a = 0.6 * (unit(rng) - 0.5),
                            .b = 0.6 * (unit(rng) - 0.5)};
-    if (ApplyStrike(m, kEffectDrag, strike, s.Find("cue"), &s).ok()) shots.push_back(s);
+    if (ApplyStrike(m, 0, strike, s.Find("cue"), &s).ok()) shots.push_back(s);
   }
   const SolverOptions o{.engine = Engine::kEvent,
-                        .disabled = static_cast<uint32_t>(state.range(0))};
-  state.SetLabel(absl::StrFormat("event, disabled 0x%x", state.range(0)));
+                        .effects = static_cast<uint32_t>(state.range(0))};
+  state.SetLabel(absl::StrFormat("event, effects 0x%x", state.range(0)));
   int64_t events = 0;
   for (auto _ : state) {
     events = 0;
@@ -113,8 +113,8 @@ void BM_RandomShots(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * 256);
 }
 BENCHMARK(BM_RandomShots)
-    ->Arg(kEffectDrag)
-    ->Arg(kEffectDrag | kEffectOrientation)
+    ->Arg(0)
+    ->Arg(kEffectDisableOrientation)
     ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -19,7 +19,7 @@ struct Scene {
   std::string name;
   TableModel model;
   TableState state;  ///< struck, ready to simulate
-  uint32_t disabled = kEffectDrag;  ///< SolverOptions::disabled for this scene
+  uint32_t effects = 0;  ///< SolverOptions::effects for this scene
 };
 
 inline Ball PlaceBall(std::string id, double x, double y, const TableModel& m) {
@@ -54,7 +54,7 @@ inline Scene MakeScene(const std::string& name) {
     std::abort();
   }
   if (!ApplyStrike(m, 0, strike, s.Find("cue"), &s).ok()) std::abort();
-  return {name, std::move(m), std::move(s), name == "bank-drag" ? 0u : kEffectDrag};
+  return {name, std::move(m), std::move(s), name == "bank-drag" ? uint32_t{kEffectEnableDrag} : 0u};
 }
 
 }  // namespace sportsim::billiards

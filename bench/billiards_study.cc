@@ -33,7 +33,7 @@ Run Simulate(const Scene& scene, Integrator integ, double dt, int repeats) {
   const SolverOptions options{.engine = dt > 0 ? Engine::kStepped : Engine::kEvent,
                               .integrator = integ,
                               .dt_s = dt > 0 ? dt : 1.0 / 960,
-                              .disabled = scene.disabled};
+                              .effects = scene.effects};
   for (int k = 0; k < repeats; ++k) {
     const double c0 = ThreadCpuSeconds();
     absl::StatusOr<ShotResult> r = SimulateShot(scene.model, options, scene.state, {});
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
               "events_reference,cpu_s_per_simulated_s,t_rest_s,reference_self_error_m\n");
   for (const char* name : {"straight", "cut", "bank", "bank-drag", "break"}) {
     const Scene scene = MakeScene(name);
-    const bool exact = (scene.disabled & kEffectDrag) != 0;
+    const bool exact = (scene.effects & kEffectEnableDrag) == 0;
     const Run ref = exact ? Simulate(scene, Integrator::kRk4, 0.0, quick ? 3 : 201)
                           : Simulate(scene, Integrator::kRk4, ref_dt, 1);
     const Run check = Simulate(scene, Integrator::kRk4, exact ? ref_dt : 2 * ref_dt, 1);

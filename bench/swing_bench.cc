@@ -9,11 +9,11 @@ namespace sportsim::swing {
 namespace {
 
 void BM_SwingToImpact(benchmark::State& state) {
-  const auto integ = static_cast<SwingIntegrator>(state.range(0));
+  const SwingIntegrator integ = kAllSwingIntegrators[static_cast<size_t>(state.range(0))];
   const SwingModel m = *SwingModel::Create(SwingParams{});
   const TorqueProgram p = TorqueProgram::Chapter();
   SwingSolverOptions o{.integrator = integ};
-  if (integ == SwingIntegrator::kDp45) o.tolerance = 1e-8; else o.dt_s = 0.0025;
+  if (integ == SwingIntegrator::kDp45) o.accuracy.tolerance = 1e-8; else o.accuracy.dt_s = 0.0025;
   state.SetLabel(std::string(SwingIntegratorName(integ)));
   for (auto _ : state) {
     absl::StatusOr<SwingRunResult> r = SimulateSwing(m, p, o, {});
@@ -34,7 +34,7 @@ void BM_SwingDerivative(benchmark::State& state) {
   state.SetLabel(state.range(0) == 0 ? "full physics" : "gravity+shoulder off");
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_SwingDerivative)->Arg(0)->Arg(kSwingGravity | kSwingShoulderAccel);
+BENCHMARK(BM_SwingDerivative)->Arg(0)->Arg(kSwingDisableGravity | kSwingDisableShoulderAccel);
 
 }  // namespace
 }  // namespace sportsim::swing

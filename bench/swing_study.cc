@@ -22,8 +22,8 @@ namespace {
 class Reference {
  public:
   Reference(const SwingModel& m, const TorqueProgram& p) {
-    SwingSolverOptions o{.integrator = SwingIntegrator::kDp45, .tolerance = 1e-13,
-                         .max_step_s = 1e-3};
+    SwingSolverOptions o{.integrator = SwingIntegrator::kDp45,
+                         .accuracy = {.tolerance = 1e-13, .max_step_s = 1e-3}};
     SwingStepper s = *SwingStepper::Create(&m, &p, o);
     stepper_.emplace(std::move(s));
     StepRecord rec;
@@ -49,9 +49,9 @@ void Study() {
   const TorqueProgram p = TorqueProgram::Chapter();
   Reference ref(m, p);
   const SwingRunResult exact = *SimulateSwing(
-      m, p, {.integrator = SwingIntegrator::kDp45, .tolerance = 1e-13}, {});
+      m, p, {.integrator = SwingIntegrator::kDp45, .accuracy = {.tolerance = 1e-13}}, {});
   const SwingRunResult check =
-      *SimulateSwing(m, p, {.integrator = SwingIntegrator::kRk4, .dt_s = 1e-5}, {});
+      *SimulateSwing(m, p, {.integrator = SwingIntegrator::kRk4, .accuracy = {.dt_s = 1e-5}}, {});
   std::printf("# reference impact t_s=%.15g speed_mps=%.15g ground_speed_mps=%.15g "
               "rk4_1e-5_dt_diff_s=%.3g rk4_1e-5_dv_diff_mps=%.3g\n",
               exact.impact->t_s, exact.impact->clubhead_speed_mps,
@@ -65,7 +65,7 @@ void Study() {
     const bool adaptive = integ == SwingIntegrator::kDp45;
     for (double setting : adaptive ? tols : dts) {
       SwingSolverOptions o{.integrator = integ};
-      if (adaptive) o.tolerance = setting; else o.dt_s = setting;
+      if (adaptive) o.accuracy.tolerance = setting; else o.accuracy.dt_s = setting;
       absl::StatusOr<SwingRunResult> r = SimulateSwing(m, p, o, {});
       if (!r.ok() || !r->impact) {
         std::printf("%s,%g,,,,,,,,\"%s\"\n", std::string(SwingIntegratorName(integ)).c_str(),

@@ -97,8 +97,8 @@ class Watch final : public grpc::ClientReadReactor<v1::TableSnapshot> {
 int Run() {
   const int n = absl::GetFlag(FLAGS_tables);
   server::ServerConfig config{.listen = "127.0.0.1:0"};
-  config.tables.max_tables = n + 1;
-  config.tables.max_watchers_per_table = std::max(1, absl::GetFlag(FLAGS_watchers));
+  config.tables.world.max_worlds = n + 1;
+  config.tables.world.max_watchers = std::max(1, absl::GetFlag(FLAGS_watchers));
   config.tick_workers = absl::GetFlag(FLAGS_workers);
   absl::StatusOr<std::unique_ptr<server::ServerApp>> app = server::ServerApp::Start(config);
   if (!app.ok()) {
@@ -188,7 +188,7 @@ int Run() {
   std::this_thread::sleep_for(std::chrono::duration<double>(absl::GetFlag(FLAGS_warmup)));
   const auto snapshot = [&] {
     struct S {
-      server::TableStats stats;
+      server::WorldStats stats;
       std::vector<int64_t> latency;
       int64_t client_snapshots = 0, bytes = 0, shots = 0;
       double cpu = 0;
@@ -236,7 +236,7 @@ int Run() {
       config.tick_workers > 0 ? config.tick_workers
                                 : static_cast<int>(std::thread::hardware_concurrency()),
       secs);
-  std::printf("moving tables (end)      %d\n", b.stats.moving);
+  std::printf("moving tables (end)      %d\n", b.stats.running);
   std::printf("ticks/s                  %.0f (of %.0f if all %d moved)\n", ticks / secs,
               n * absl::GetFlag(FLAGS_tick_hz), n);
   std::printf("late ticks               %.3f %%  (+ %.3f %% slipped)\n",

@@ -4,6 +4,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -65,6 +66,14 @@ int RunSwing(const Context& ctx, const std::vector<std::string>& args);
 int RunFlight(const Context& ctx, const std::vector<std::string>& args);
 int RunShot(const Context& ctx, const std::vector<std::string>& args);
 int RunTable(const Context& ctx, const std::vector<std::string>& args);
+
+/// A usage error's message when a games flag (--game, --race-to, --shot-clock, --start, --rule,
+/// --call, --safety, --push-out, --nominate, --choice) is given to a command that does not take
+/// it; nullopt when every one given applies.
+std::optional<std::string> CheckGameFlags(std::string_view command, std::string_view sub);
+
+/// Whether a flag (absl name, with underscores: "race_to") was written on the command line.
+bool FlagGiven(std::string_view name);
 
 /// Values of a repeatable flag (--ball, --param), in command-line order. absl flags keep only
 /// the last value, so main() takes these out of argv before parsing.

@@ -18,6 +18,7 @@
 #include "absl/flags/usage.h"
 #include "absl/strings/str_cat.h"
 #include "client/cli.h"
+#include "client/game_text.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
 
@@ -66,8 +67,15 @@ Commands:
       [--sample-rate HZ] [--max-time S] [--svg FILE]
   table create [setup and solver flags of shot simulate] [--seats N] [--seat-names A,B]
       [--tick-hz HZ]                       an authoritative table; prints the seat tokens
+      [--game free|8ball|9ball|10ball|snooker|three-cushion --race-to N --shot-clock S
+      --start break|in-play --rule NAME=VALUE ... --noise X --seed N]   a ruled game (the
+      server referees; prints the admin token too)
   table list [--page-size N --page-token T] | table get ID [--geometry]
   table shoot ID --token T [strike flags of shot simulate] [--next-seat N]
+      [--call BALL:POCKET | --safety] [--push-out] [--nominate BALL]
+  table decide ID --token T --choice CHOICE   answer a pending decision (ruled games)
+  table concede ID --token T [--seat N]       concede the frame (admin token: for seat N)
+  table record ID                             the match record, one line per action
   table place ID --token T --ball ID@X,Y   ball in hand (the seat to play, balls at rest)
   table turn ID --token T --seat N | table reset ID --token T | table delete ID --token T
   table watch ID [--rate HZ] [--until-rest] [--fields position,velocity,spin,orientation]
@@ -76,15 +84,21 @@ Flags may be written --name value or --name=value; dashes and underscores are th
 Errors: the gRPC status code name and message on stderr, exit status = the code number
 (64 for usage errors). --helpfull lists every flag.)";
 
-constexpr std::string_view kRepeatable[] = {"ball", "param"};
+constexpr std::string_view kRepeatable[] = {"ball", "param", "rule"};
 
 std::map<std::string, std::vector<std::string>, std::less<>>& Repeated() {
   static auto* values = new std::map<std::string, std::vector<std::string>, std::less<>>();
   return *values;
 }
 
+// Names (with underscores) of the flags written on the command line.
+std::set<std::string, std::less<>>& Given() {
+  static auto* names = new std::set<std::string, std::less<>>();
+  return *names;
+}
+
 // absl flag names cannot contain '-': accept --qbeta-until for --qbeta_until. Repeatable flags
-// (--ball ID@X,Y, --param NAME=VALUE) are taken out here, since absl keeps only a flag's last
+// (--ball ID@X,Y, --param NAME=VALUE, --rule NAME=VALUE) are taken out here, since absl keeps only a flag's last
 // value and splits vectors at commas.
 std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
   std::vector<std::string> out;
@@ -113,6 +127,7 @@ std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
       for (size_t j = 2; j < std::min(end, a.size()); ++j) {
         if (a[j] == '-') a[j] = '_';
       }
+      Given().insert(a.substr(2, end == std::string::npos ? std::string::npos : end - 2));
     }
     out.push_back(std::move(a));
   }
@@ -179,6 +194,150 @@ std::string Int64AsNumbers(const google::protobuf::Descriptor* d, const std::str
   return out;
 }
 
+// A game's state leaves unset what does not apply to the game; its JSON says so by leaving the
+// key out. Protobuf's printer (always_print_primitive_fields) already leaves out unset optional
+// fields and unset messages, but prints an empty repeated field as [] and an empty map as {}:
+// this pass drops those inside every GameState object, walking the JSON text along the message
+// type and keeping the printer's layout (indentation, key order) for everything else.
+constexpr std::string_view kPrunedType = "sportsim.v1.GameState";
+
+bool HasPrunedType(const google::protobuf::Descriptor* d,
+                   std::set<const google::protobuf::Descriptor*>* seen) {
+  if (d->full_name() == kPrunedType) return true;
+  if (!seen->insert(d).second) return false;
+  for (int i = 0; i < d->field_count(); ++i) {
+    const google::protobuf::Descriptor* m = d->field(i)->message_type();
+    if (m != nullptr && HasPrunedType(m, seen)) return true;
+  }
+  return false;
+}
+
+class JsonPruner {
+ public:
+  explicit JsonPruner(std::string_view json) : s_(json) {}
+
+  // One JSON value; `type` is its message type when it is a message (or, for an array, the
+  // type of its elements), else null. `map_values` makes an object a map with values of `type`.
+  std::string Value(const google::protobuf::Descriptor* type, bool map_values = false) {
+    if (Peek() == '{') return Object(type, map_values);
+    if (Peek() == '[') return Array(type);
+    const size_t start = pos_;
+    if (Peek() == '"') {
+      SkipString();
+    } else {
+      while (pos_ < s_.size() && s_[pos_] != ',' && s_[pos_] != '}' && s_[pos_] != ']' &&
+             !std::isspace(static_cast<unsigned char>(s_[pos_]))) {
+        ++pos_;
+      }
+    }
+    return std::string(s_.substr(start, pos_ - start));
+  }
+
+  bool Done() const { return pos_ >= s_.size(); }
+  std::string Rest() { return std::string(s_.substr(pos_)); }
+
+ private:
+  char Peek() const { return pos_ < s_.size() ? s_[pos_] : '\0'; }
+  std::string Space() {
+    const size_t start = pos_;
+    while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
+    return std::string(s_.substr(start, pos_ - start));
+  }
+  void SkipString() {
+    ++pos_;  // the opening quote
+    while (pos_ < s_.size() && s_[pos_] != '"') pos_ += s_[pos_] == '\\' ? 2 : 1;
+    ++pos_;
+  }
+  static bool Empty(std::string_view v) {
+    size_t n = 0;
+    for (char c : v) n += !std::isspace(static_cast<unsigned char>(c));
+    return n == 2 && (v.front() == '[' || v.front() == '{');
+  }
+  // Items of an object or array: the space before each, its text, and the space before the
+  // closing bracket. Joined back with commas as they were.
+  static std::string Join(char open, const std::vector<std::string>& items,
+                          const std::string& tail, char close) {
+    std::string out(1, open);
+    for (size_t i = 0; i < items.size(); ++i) {
+      if (i > 0) out += ',';
+      out += items[i];
+    }
+    out += tail;
+    out += close;
+    return out;
+  }
+
+  std::string Object(const google::protobuf::Descriptor* type, bool map_values) {
+    ++pos_;  // {
+    const bool prune = type != nullptr && !map_values && type->full_name() == kPrunedType;
+    std::vector<std::string> items;
+    std::string tail = Space();
+    while (pos_ < s_.size() && Peek() != '}') {
+      std::string item = tail;
+      const size_t key_start = pos_;
+      SkipString();
+      const std::string key(s_.substr(key_start + 1, pos_ - key_start - 2));
+      item += s_.substr(key_start, pos_ - key_start);
+      item += Space();
+      if (Peek() == ':') {
+        ++pos_;
+        item += ':';
+      }
+      item += Space();
+      const google::protobuf::FieldDescriptor* f =
+          map_values || type == nullptr ? nullptr : type->FindFieldByName(key);
+      std::string value;
+      if (map_values) {
+        value = Value(type);
+      } else if (f != nullptr && f->is_map()) {
+        value = Value(f->message_type()->map_value()->message_type(), true);
+      } else {
+        value = Value(f != nullptr ? f->message_type() : nullptr);
+      }
+      item += value;
+      tail = Space();
+      const bool drop = prune && f != nullptr && f->is_repeated() && Empty(value);
+      if (Peek() == ',') {
+        ++pos_;
+        item += tail;
+        tail = Space();
+      }
+      if (!drop) items.push_back(std::move(item));
+    }
+    ++pos_;  // }
+    return Join('{', items, tail, '}');
+  }
+
+  std::string Array(const google::protobuf::Descriptor* type) {
+    ++pos_;  // [
+    std::vector<std::string> items;
+    std::string tail = Space();
+    while (pos_ < s_.size() && Peek() != ']') {
+      std::string item = tail + Value(type);
+      tail = Space();
+      if (Peek() == ',') {
+        ++pos_;
+        item += tail;
+        tail = Space();
+      }
+      items.push_back(std::move(item));
+    }
+    ++pos_;  // ]
+    return Join('[', items, tail, ']');
+  }
+
+  std::string_view s_;
+  size_t pos_ = 0;
+};
+
+std::string PruneGameJson(const google::protobuf::Descriptor* d, const std::string& json) {
+  std::set<const google::protobuf::Descriptor*> seen;
+  if (!HasPrunedType(d, &seen)) return json;
+  JsonPruner pruner(json);
+  std::string out = pruner.Value(d);
+  return out + pruner.Rest();
+}
+
 }  // namespace
 
 std::unique_ptr<grpc::ClientContext> Context::NewCall() const {
@@ -215,8 +374,10 @@ std::string ToJson(const google::protobuf::Message& message, bool one_line) {
   options.add_whitespace = !one_line;
   std::string out;
   (void)google::protobuf::util::MessageToJsonString(message, &out, options);
-  return Int64AsNumbers(message.GetDescriptor(), out);
+  return Int64AsNumbers(message.GetDescriptor(), PruneGameJson(message.GetDescriptor(), out));
 }
+
+bool FlagGiven(std::string_view name) { return Given().contains(name); }
 
 const std::vector<std::string>& RepeatedFlagValues(std::string_view name) {
   static const std::vector<std::string> kNone;
@@ -269,6 +430,7 @@ int RunInfo(const Context& ctx, const std::vector<std::string>& args) {
   print_params(c.parameters());
   std::cout << "  swing parameters:\n";
   print_params(c.swing_parameters());
+  PrintGames(c);
   return 0;
 }
 
@@ -321,6 +483,7 @@ int main(int argc, char** argv) {
   channel_args.SetMaxReceiveMessageSize(64 << 20);
   ctx.channel = grpc::CreateCustomChannel(ctx.server, grpc::InsecureChannelCredentials(),
                                           channel_args);
+  if (auto bad = CheckGameFlags(command, rest.empty() ? "" : rest[0])) return UsageError(*bad);
   if (command == "info") return RunInfo(ctx, rest);
   if (command == "health") return RunHealth(ctx, rest);
   if (command == "swing") return RunSwing(ctx, rest);

@@ -13,15 +13,19 @@
 #include "absl/flags/declare.h"
 #include "absl/flags/flag.h"
 #include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "client/billiards_flags.h"
 #include "client/cli.h"
+#include "client/game_text.h"
 #include "client/table_svg.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
 ABSL_DECLARE_FLAG(std::string, svg);
+ABSL_DECLARE_FLAG(double, noise);
+ABSL_DECLARE_FLAG(uint64_t, seed);
 
 ABSL_FLAG(int, seats, 0, "table/swing create: number of seats (table default 2, swing 1)");
 ABSL_FLAG(std::vector<std::string>, seat_names, {}, "table/swing create: seat names, comma separated");
@@ -42,6 +46,18 @@ ABSL_FLAG(std::optional<uint64_t>, from_sequence, std::nullopt,
 ABSL_FLAG(int, page_size, 0, "table/swing list: tables or sessions per page (default 100)");
 ABSL_FLAG(std::string, page_token, "", "table/swing list: the next_page_token of the previous page");
 ABSL_FLAG(bool, geometry, false, "table get: include cushions and pockets");
+// Games (ruled tables).
+ABSL_FLAG(std::string, game, "",
+          "table create: free (default), 8ball, 9ball, 10ball, snooker, three-cushion");
+ABSL_FLAG(std::optional<int>, race_to, std::nullopt, "table create: frames to win the match (default 1)");
+ABSL_FLAG(std::optional<double>, shot_clock, std::nullopt,
+          "table create: seconds of table time per shot (0 = off, the default)");
+ABSL_FLAG(std::string, start, "", "table create: break (default) or in-play");
+ABSL_FLAG(std::string, call, "", "table shoot: the called ball and pocket, BALL:POCKET");
+ABSL_FLAG(bool, safety, false, "table shoot: declare a safety");
+ABSL_FLAG(bool, push_out, false, "table shoot: declare a push-out (9-ball, 10-ball)");
+ABSL_FLAG(std::string, nominate, "", "table shoot: the nominated ball (snooker)");
+ABSL_FLAG(std::string, choice, "", "table decide: one of the pending decision's choices");
 
 namespace sportsim::cli {
 namespace {
@@ -70,7 +86,51 @@ std::string SummaryLine(const v1::ShotSummary& s) {
       s.struck_ball_pocketed() ? ", struck ball pocketed" : "", s.duration_s(), s.start_tick(),
       s.end_tick());
   if (!s.error().empty()) line += " (stopped: " + s.error() + ")";
+  if (s.has_call()) {
+    const std::string call = CallText(s.call());
+    if (!call.empty()) line += "; " + call;
+  }
+  if (s.has_verdict()) line += "; " + VerdictText(s.verdict(), s.seat());
   return line;
+}
+
+bool Given(std::string_view flag) { return FlagGiven(flag); }
+
+// --game --race-to --shot-clock --start --rule ... --noise --seed: CreateTableRequest.game, set
+// when any of them is given (unset: free play, as before games).
+std::optional<std::string> BuildGame(v1::CreateTableRequest* request) {
+  const std::vector<std::string>& rules = RepeatedFlagValues("rule");
+  if (!Given("game") && !Given("race_to") && !Given("shot_clock") && !Given("start") &&
+      rules.empty() && !Given("noise") && !Given("seed")) {
+    return std::nullopt;
+  }
+  v1::GameConfig* g = request->mutable_game();
+  g->set_name(absl::GetFlag(FLAGS_game));
+  if (const auto race = absl::GetFlag(FLAGS_race_to)) {
+    if (*race < 1) return "--race-to must be a number of frames, at least 1";
+    g->set_race_to(static_cast<uint32_t>(*race));
+  }
+  if (const auto clock = absl::GetFlag(FLAGS_shot_clock)) {
+    if (!(*clock >= 0)) return "--shot-clock must be seconds, 0 (off) or more";
+    g->set_shot_clock_s(*clock);
+  }
+  const std::string start = absl::GetFlag(FLAGS_start);
+  if (!start.empty() && start != "break" && start != "in-play") {
+    return "--start must be break or in-play, got '" + start + "'";
+  }
+  g->set_start(start);
+  for (const std::string& spec : rules) {
+    const size_t eq = spec.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size()) {
+      return "--rule must be NAME=VALUE, got '" + spec + "'";
+    }
+    const std::string name = spec.substr(0, eq);
+    if (g->rules().contains(name)) return "--rule " + name + " given twice";
+    (*g->mutable_rules())[name] = spec.substr(eq + 1);
+  }
+  g->set_noise(absl::GetFlag(FLAGS_noise));
+  if (Given("seed")) g->set_seed(absl::GetFlag(FLAGS_seed));
+  return std::nullopt;
 }
 
 int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
@@ -83,6 +143,9 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   request.set_seats(static_cast<uint32_t>(seats));
   for (const std::string& n : absl::GetFlag(FLAGS_seat_names)) request.add_seat_names(n);
   request.set_tick_hz(absl::GetFlag(FLAGS_tick_hz));
+  if (auto bad = BuildGame(&request)) return UsageError(*bad);
+  // A ruled game is played on its own table unless --table names one.
+  if (request.has_game() && !Given("table")) request.mutable_table()->clear_preset();
   v1::CreateTableResponse r;
   const grpc::Status status = stub.CreateTable(ctx.NewCall().get(), request, &r);
   if (!status.ok()) return ReportRpcError(status);
@@ -92,6 +155,14 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
                 r.tick_hz());
     for (const v1::Seat& s : r.seats()) {
       std::printf("  seat %u %-10s token %s\n", s.seat(), s.name().c_str(), s.token().c_str());
+    }
+    if (!r.admin_token().empty()) {
+      std::printf("  admin         token %s\n", r.admin_token().c_str());
+    }
+    if (r.has_game()) {
+      for (const std::string& line : GameLines(r.game(), nullptr)) {
+        std::printf("  %s\n", line.c_str());
+      }
     }
   });
 }
@@ -133,6 +204,11 @@ int RunGet(const Context& ctx, Stub& stub, const std::vector<std::string>& args)
                 r.tick_hz(), static_cast<long long>(r.tick()), r.t_s(),
                 r.at_rest() ? "at rest" : "moving", r.turn(),
                 static_cast<unsigned long long>(r.shots()), r.watchers());
+    if (r.has_game()) {
+      for (const std::string& line : GameLines(r.game(), r.has_last_shot() ? &r.last_shot() : nullptr)) {
+        std::printf("%s\n", line.c_str());
+      }
+    }
     if (r.has_last_shot()) std::printf("last %s\n", SummaryLine(r.last_shot()).c_str());
     std::printf("%-8s %9s %9s  %s\n", "ball", "x_m", "y_m", "state");
     for (const v1::BallState& b : r.balls()) std::printf("%s\n", BallLine(b).c_str());
@@ -143,7 +219,7 @@ int RunSimple(const Context& ctx, Stub& stub, const std::string& verb,
               const std::vector<std::string>& args) {
   if (args.size() != 1) return UsageError("table " + verb + " ID --token T");
   const std::string token = absl::GetFlag(FLAGS_token);
-  if (token.empty()) return UsageError("table " + verb + " needs --token (a seat's token)");
+  if (token.empty()) return UsageError("table " + verb + " needs --token (a seat's or the admin token)");
   grpc::Status status;
   std::string text;
   if (verb == "delete") {
@@ -197,6 +273,32 @@ int RunSimple(const Context& ctx, Stub& stub, const std::string& verb,
   return Print(ctx, r, [&] { std::printf("seat %d to play\n", *seat); });
 }
 
+// --call BALL:POCKET | --safety, --push-out, --nominate BALL: ShootRequest.call, set when any
+// of them is given.
+std::optional<std::string> BuildCall(v1::ShootRequest* request) {
+  const std::string call = absl::GetFlag(FLAGS_call);
+  const bool safety = absl::GetFlag(FLAGS_safety);
+  const bool push_out = absl::GetFlag(FLAGS_push_out);
+  const std::string nominate = absl::GetFlag(FLAGS_nominate);
+  if (Given("call") && safety) return "give --call BALL:POCKET or --safety, not both";
+  if (!Given("call") && !safety && !push_out && !Given("nominate")) return std::nullopt;
+  v1::ShotCall* c = request->mutable_call();
+  if (Given("call")) {
+    const size_t colon = call.find(':');
+    if (colon == std::string::npos || colon == 0 || colon + 1 == call.size() ||
+        call.find(':', colon + 1) != std::string::npos) {
+      return "--call must be BALL:POCKET (e.g. 9:top_left), got '" + call + "'";
+    }
+    c->set_ball(call.substr(0, colon));
+    c->set_pocket(call.substr(colon + 1));
+  }
+  if (Given("nominate") && nominate.empty()) return "--nominate needs a ball";
+  c->set_safety(safety);
+  c->set_push_out(push_out);
+  c->set_nominate(nominate);
+  return std::nullopt;
+}
+
 int RunShoot(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
   if (args.size() != 1) return UsageError("table shoot ID --token T (strike flags)");
   v1::ShootRequest request;
@@ -204,6 +306,10 @@ int RunShoot(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   request.set_token(absl::GetFlag(FLAGS_token));
   if (request.token().empty()) return UsageError("table shoot needs --token (the seat's token)");
   if (auto bad = BuildStrike(request.mutable_strike())) return UsageError(*bad);
+  // Unnamed, the struck ball is the server's to choose: the cue ball, or in a ruled game the
+  // striker's own (three-cushion: yellow for seat 1).
+  if (!Given("strike_ball")) request.mutable_strike()->clear_ball();
+  if (auto bad = BuildCall(&request)) return UsageError(*bad);
   if (const auto next = absl::GetFlag(FLAGS_next_seat)) {
     if (*next < 0) return UsageError("--next-seat must be a seat number");
     request.set_next_seat(static_cast<uint32_t>(*next));
@@ -212,10 +318,117 @@ int RunShoot(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   const grpc::Status status = stub.Shoot(ctx.NewCall().get(), request, &r);
   if (!status.ok()) return ReportRpcError(status);
   return Print(ctx, r, [&] {
-    std::printf("shot %llu starts at tick %lld: ball %.3f m/s, phi %.2f deg\n",
+    const std::string call = request.has_call() ? CallText(request.call()) : "";
+    std::printf("shot %llu starts at tick %lld: ball %.3f m/s, phi %.2f deg%s%s\n",
                 static_cast<unsigned long long>(r.shot_id()),
                 static_cast<long long>(r.start_tick()), r.strike().ball_speed_mps(),
-                r.strike().phi_deg());
+                r.strike().phi_deg(), call.empty() ? "" : "; ", call.c_str());
+  });
+}
+
+void PrintGameLines(const v1::GameState& g) {
+  for (const std::string& line : GameLines(g, nullptr)) std::printf("%s\n", line.c_str());
+}
+
+int RunDecide(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("table decide ID --token T --choice CHOICE");
+  v1::DecideRequest request;
+  request.set_table_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  request.set_choice(absl::GetFlag(FLAGS_choice));
+  if (request.token().empty()) return UsageError("table decide needs --token (the deciding seat's token)");
+  if (request.choice().empty()) {
+    return UsageError("table decide needs --choice (one of the choices the decision lists)");
+  }
+  v1::DecideResponse r;
+  const grpc::Status status = stub.Decide(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("decided %s (sequence %llu)\n", request.choice().c_str(),
+                static_cast<unsigned long long>(r.sequence()));
+    if (r.has_game()) PrintGameLines(r.game());
+  });
+}
+
+int RunConcede(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("table concede ID --token T [--seat N]");
+  v1::ConcedeRequest request;
+  request.set_table_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  if (request.token().empty()) {
+    return UsageError("table concede needs --token (a seat's, or the admin token with --seat)");
+  }
+  if (const auto seat = absl::GetFlag(FLAGS_seat)) {
+    if (*seat < 0) return UsageError("--seat must be a seat number");
+    request.set_seat(static_cast<uint32_t>(*seat));
+  }
+  v1::ConcedeResponse r;
+  const grpc::Status status = stub.Concede(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("conceded (sequence %llu)\n", static_cast<unsigned long long>(r.sequence()));
+    if (r.has_game()) PrintGameLines(r.game());
+  });
+}
+
+std::string ActionLine(const v1::MatchAction& a) {
+  std::string line = absl::StrFormat("tick %-8lld seat %u  ", static_cast<long long>(a.tick()),
+                                     a.seat());
+  switch (a.kind()) {
+    case v1::MatchAction::SHOOT: {
+      absl::StrAppend(&line, absl::StrFormat("shot %llu: %s",
+                                             static_cast<unsigned long long>(a.shot_id()),
+                                             StrikeText(a.strike())));
+      if (a.has_call()) {
+        const std::string call = CallText(a.call());
+        if (!call.empty()) absl::StrAppend(&line, "; ", call);
+      }
+      if (a.has_seed()) absl::StrAppend(&line, "; seed ", a.seed());
+      if (a.has_applied()) {
+        const v1::StrikeReport& s = a.applied();
+        absl::StrAppend(&line, absl::StrFormat(
+                                   "; applied: ball speed %s m/s, phi %s deg, theta %s deg, a %s, b %s",
+                                   Num(s.ball_speed_mps()), Num(s.phi_deg()),
+                                   Num(s.theta_deg()), Num(s.a()), Num(s.b())));
+      }
+      break;
+    }
+    case v1::MatchAction::PLACE:
+      absl::StrAppend(&line, absl::StrFormat("placed %s at (%s, %s) m", a.place().id(),
+                                             Num(a.place().x_m()), Num(a.place().y_m())));
+      break;
+    case v1::MatchAction::DECIDE: absl::StrAppend(&line, "decided ", a.choice()); break;
+    case v1::MatchAction::CONCEDE: absl::StrAppend(&line, "conceded"); break;
+    case v1::MatchAction::SHOT_CLOCK: absl::StrAppend(&line, "shot clock ran out"); break;
+    case v1::MatchAction::RESET: absl::StrAppend(&line, "re-racked (the match starts again)"); break;
+    default: absl::StrAppend(&line, "action ", static_cast<int>(a.kind())); break;
+  }
+  if (a.has_verdict()) {
+    absl::StrAppend(&line, "; ", a.kind() == v1::MatchAction::SHOOT
+                                     ? VerdictText(a.verdict(), a.seat())
+                                     : RulingText(a.verdict(), a.kind() == v1::MatchAction::CONCEDE
+                                                                   ? "conceded" : ""));
+  }
+  return line;
+}
+
+int RunRecord(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("table record ID");
+  v1::GetMatchRecordRequest request;
+  request.set_table_id(args[0]);
+  v1::MatchRecord r;
+  const grpc::Status status = stub.GetMatchRecord(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    const v1::GameConfig& g = r.create().game();
+    std::printf("match on table %s: %s, %d actions, %s", r.table_id().c_str(),
+                g.name().empty() ? "free" : g.name().c_str(), r.actions_size(),
+                r.ended() ? "ended" : "in progress");
+    if (g.has_seed()) std::printf(", noise %s with seed %llu", Num(g.noise()).c_str(),
+                                  static_cast<unsigned long long>(g.seed()));
+    std::printf("\n");
+    for (const v1::MatchAction& a : r.actions()) std::printf("%s\n", ActionLine(a).c_str());
+    if (r.has_game()) PrintGameLines(r.game());
   });
 }
 
@@ -239,11 +452,24 @@ class WatchText {
           break;
         case v1::table_reset: notes.push_back("re-racked"); break;
         case v1::turn: notes.push_back(absl::StrFormat("seat %d to play", e.seat())); break;
-        case v1::shot_end: notes.push_back(SummaryLine(e.summary())); break;
-        default: break;
+        case v1::shot_end:
+          notes.push_back(SummaryLine(e.summary()));
+          last_shot_ = e.summary();
+          break;
+        default:
+          if (std::string note = GameEventNote(e); !note.empty()) notes.push_back(note);
+          break;
       }
     }
-    const bool interesting = !notes.empty() || s.at_rest() != last_at_rest_ || s.resync();
+    // The game in words whenever it changed (and on the first snapshot that carries it).
+    std::vector<std::string> game_lines;
+    if (s.has_game()) {
+      game_lines = GameLines(s.game(), last_shot_.has_verdict() ? &last_shot_ : nullptr);
+      if (game_lines == last_game_lines_) game_lines.clear();
+      else last_game_lines_ = game_lines;
+    }
+    const bool interesting = !notes.empty() || !game_lines.empty() ||
+                             s.at_rest() != last_at_rest_ || s.resync();
     if (!interesting && s.t_s() < next_line_t_) return;
     next_line_t_ = s.t_s() + 0.25;
     last_at_rest_ = s.at_rest();
@@ -263,10 +489,13 @@ class WatchText {
                 s.at_rest() ? "at rest" : "moving ", moving, on, ev.c_str(),
                 s.resync() ? "  (resync: events lost)" : "");
     for (const std::string& n : notes) std::printf("    %s\n", n.c_str());
+    for (const std::string& n : game_lines) std::printf("    %s\n", n.c_str());
     std::fflush(stdout);
   }
 
  private:
+  v1::ShotSummary last_shot_;
+  std::vector<std::string> last_game_lines_;
   std::map<std::string, v1::MotionState> state_;
   std::map<std::string, int> counts_;  // events since the last line
   double next_line_t_ = -1.0;
@@ -364,9 +593,34 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
 
 }  // namespace
 
+std::optional<std::string> CheckGameFlags(std::string_view command, std::string_view sub) {
+  struct Use {
+    const char* flag;   // absl name
+    const char* shown;  // as written on the command line
+    const char* verb;   // the only `table` subcommand that takes it
+  };
+  static constexpr Use kUses[] = {
+      {"game", "--game", "create"},          {"race_to", "--race-to", "create"},
+      {"shot_clock", "--shot-clock", "create"}, {"start", "--start", "create"},
+      {"call", "--call", "shoot"},           {"safety", "--safety", "shoot"},
+      {"push_out", "--push-out", "shoot"},   {"nominate", "--nominate", "shoot"},
+      {"choice", "--choice", "decide"},
+  };
+  const bool table = command == "table";
+  for (const Use& u : kUses) {
+    if (Given(u.flag) && !(table && sub == u.verb)) {
+      return absl::StrCat(u.shown, " applies to table ", u.verb, " only");
+    }
+  }
+  if (!RepeatedFlagValues("rule").empty() && !(table && sub == "create")) {
+    return "--rule applies to table create only";
+  }
+  return std::nullopt;
+}
+
 int RunTable(const Context& ctx, const std::vector<std::string>& args) {
   static constexpr const char* kVerbs =
-      "create, list, get, delete, reset, place, shoot, turn, watch";
+      "create, list, get, delete, reset, place, shoot, turn, watch, decide, concede, record";
   if (args.empty()) return UsageError(std::string("table needs a subcommand: ") + kVerbs);
   if (ctx.format == Format::kCsv && args[0] != "watch") {
     return UsageError("table " + args[0] + " has no csv form (json, jsonl or text)");
@@ -382,6 +636,9 @@ int RunTable(const Context& ctx, const std::vector<std::string>& args) {
   }
   if (verb == "shoot") return RunShoot(ctx, *stub, rest);
   if (verb == "watch") return RunWatch(ctx, *stub, rest);
+  if (verb == "decide") return RunDecide(ctx, *stub, rest);
+  if (verb == "concede") return RunConcede(ctx, *stub, rest);
+  if (verb == "record") return RunRecord(ctx, *stub, rest);
   return UsageError("unknown table subcommand '" + verb + "' (" + kVerbs + ")");
 }
 

@@ -44,6 +44,9 @@ ABSL_FLAG(int, max_catchup_ticks, 12,
           "A table further behind its clock than this slips (runs slower than real time) instead "
           "of racing to catch up");
 ABSL_FLAG(int, event_log, 512, "Events each table keeps for watchers resuming with from_sequence");
+ABSL_FLAG(double, clock_rate, 1.0,
+          "Table and session time per wall-clock time, in [0.01, 1000]: 1 is real time; more "
+          "plays every world faster (tests, bots, replays). Outcomes depend on ticks only");
 ABSL_FLAG(int, watcher_backlog, 1024,
           "Unsent events a watcher may hold before it is resynced (full state, events lost)");
 
@@ -82,28 +85,36 @@ int main(int argc, char** argv) {
   config.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout);
   config.min_client_ping_interval = absl::GetFlag(FLAGS_min_client_ping_interval);
   config.max_receive_message_bytes = absl::GetFlag(FLAGS_max_request_bytes);
-  config.tables.max_tables = absl::GetFlag(FLAGS_max_tables);
-  config.tables.max_watchers_per_table = absl::GetFlag(FLAGS_max_watchers_per_table);
+  config.tables.world.max_worlds = absl::GetFlag(FLAGS_max_tables);
+  config.tables.world.max_watchers = absl::GetFlag(FLAGS_max_watchers_per_table);
   config.tick_workers = absl::GetFlag(FLAGS_tick_workers);
-  config.tables.max_catchup_ticks = absl::GetFlag(FLAGS_max_catchup_ticks);
-  config.tables.event_log = absl::GetFlag(FLAGS_event_log);
-  config.tables.watcher_backlog = absl::GetFlag(FLAGS_watcher_backlog);
-  config.sessions.max_sessions = absl::GetFlag(FLAGS_max_sessions);
-  config.sessions.max_watchers_per_session = absl::GetFlag(FLAGS_max_watchers_per_session);
-  config.sessions.max_catchup_ticks = config.tables.max_catchup_ticks;
-  config.sessions.watcher_backlog = config.tables.watcher_backlog;
+  config.tables.world.max_catchup_ticks = absl::GetFlag(FLAGS_max_catchup_ticks);
+  config.tables.world.event_log = absl::GetFlag(FLAGS_event_log);
+  config.tables.world.watcher_backlog = absl::GetFlag(FLAGS_watcher_backlog);
+  config.sessions.world.max_worlds = absl::GetFlag(FLAGS_max_sessions);
+  config.sessions.world.max_watchers = absl::GetFlag(FLAGS_max_watchers_per_session);
+  config.sessions.world.max_catchup_ticks = config.tables.world.max_catchup_ticks;
+  const double clock_rate = absl::GetFlag(FLAGS_clock_rate);
+  if (!(clock_rate >= 0.01 && clock_rate <= 1000)) {
+    std::cerr << "sportsim-server: --clock_rate must be in [0.01, 1000], got " << clock_rate
+              << "\n";
+    return 2;
+  }
+  config.tables.world.clock_rate = clock_rate;
+  config.sessions.world.clock_rate = clock_rate;
+  config.sessions.world.watcher_backlog = config.tables.world.watcher_backlog;
   const struct {
     const char* name;
     int value, lo, hi;
   } checks[] = {{"max_request_bytes", config.max_receive_message_bytes, 1024, 64 << 20},
-                {"max_tables", config.tables.max_tables, 1, 1000000},
-                {"max_watchers_per_table", config.tables.max_watchers_per_table, 1, 100000},
+                {"max_tables", config.tables.world.max_worlds, 1, 1000000},
+                {"max_watchers_per_table", config.tables.world.max_watchers, 1, 100000},
                 {"tick_workers", config.tick_workers, 0, 256},
-                {"max_catchup_ticks", config.tables.max_catchup_ticks, 1, 100000},
-                {"event_log", config.tables.event_log, 1, 10000000},
-                {"watcher_backlog", config.tables.watcher_backlog, 1, 10000000},
-                {"max_sessions", config.sessions.max_sessions, 1, 1000000},
-                {"max_watchers_per_session", config.sessions.max_watchers_per_session, 1, 100000}};
+                {"max_catchup_ticks", config.tables.world.max_catchup_ticks, 1, 100000},
+                {"event_log", config.tables.world.event_log, 1, 10000000},
+                {"watcher_backlog", config.tables.world.watcher_backlog, 1, 10000000},
+                {"max_sessions", config.sessions.world.max_worlds, 1, 1000000},
+                {"max_watchers_per_session", config.sessions.world.max_watchers, 1, 100000}};
   for (const auto& c : checks) {
     if (c.value < c.lo || c.value > c.hi) {
       std::cerr << "sportsim-server: --" << c.name << " must be in [" << c.lo << ", " << c.hi

@@ -136,16 +136,22 @@ class Collector final : public prometheus::Collectable {
       : tables_(tables), sessions_(sessions), scheduler_(scheduler), rpcs_(rpcs) {}
 
   std::vector<MetricFamily> Collect() const override {
-    const TableStats t = tables_->stats();
-    const SessionStats s = sessions_->stats();
-    const std::vector<ClientMetric::Label> table{{"world", "table"}};
-    const std::vector<ClientMetric::Label> session{{"world", "session"}};
+    // One row per kind of world: a new kind is one more entry here.
+    struct Kind {
+      const char* name;
+      WorldStats stats;
+      const LatencyHistogram* publish_to_write;
+    };
+    const SessionStats sessions = sessions_->stats();
+    const Kind kinds[] = {{"table", tables_->stats(), &tables_->publish_to_write()},
+                          {"session", sessions, &sessions_->publish_to_write()}};
     std::vector<MetricFamily> out;
-    const auto per_world = [&](const char* name, const char* help, MetricType type, double tv,
-                               double sv) {
+    const auto per_world = [&](const char* name, const char* help, MetricType type,
+                               auto value) {
       MetricFamily f = Family(name, help, type);
-      Add(&f, tv, table);
-      Add(&f, sv, session);
+      for (const Kind& k : kinds) {
+        Add(&f, static_cast<double>(value(k.stats)), {{"world", k.name}});
+      }
       out.push_back(std::move(f));
     };
     {
@@ -163,46 +169,41 @@ class Collector final : public prometheus::Collectable {
       out.push_back(std::move(f));
     }
     per_world("sportsim_ticks_total", "World ticks advanced", MetricType::Counter,
-              static_cast<double>(t.ticks), static_cast<double>(s.ticks));
+              [](const WorldStats& s) { return s.ticks; });
     per_world("sportsim_late_ticks_total",
               "Ticks advanced more than one period after their deadline", MetricType::Counter,
-              static_cast<double>(t.late_ticks), static_cast<double>(s.late_ticks));
+              [](const WorldStats& s) { return s.late_ticks; });
     per_world("sportsim_slipped_ticks_total",
               "Ticks skipped by slipping a world's clock (too far behind to catch up)",
-              MetricType::Counter, static_cast<double>(t.slipped_ticks),
-              static_cast<double>(s.slipped_ticks));
-    per_world("sportsim_worlds", "Tables and swing sessions held", MetricType::Gauge, t.tables,
-              s.sessions);
+              MetricType::Counter, [](const WorldStats& s) { return s.slipped_ticks; });
+    per_world("sportsim_worlds", "Tables and swing sessions held", MetricType::Gauge,
+              [](const WorldStats& s) { return s.worlds; });
     per_world("sportsim_worlds_active", "Tables with moving balls, sessions mid-swing",
-              MetricType::Gauge, t.moving, s.swinging);
+              MetricType::Gauge, [](const WorldStats& s) { return s.running; });
     per_world("sportsim_watchers", "Open snapshot streams (WatchTable, WatchSwing, DriveSwing)",
-              MetricType::Gauge, t.watchers, s.watchers);
+              MetricType::Gauge, [](const WorldStats& s) { return s.watchers; });
     per_world("sportsim_snapshots_sent_total", "Snapshots written to streams",
-              MetricType::Counter, static_cast<double>(t.snapshots_sent),
-              static_cast<double>(s.snapshots_sent));
+              MetricType::Counter, [](const WorldStats& s) { return s.snapshots_sent; });
     per_world("sportsim_snapshots_replaced_total",
               "Snapshots overtaken by a newer one before a slow reader took them (latest wins)",
-              MetricType::Counter, static_cast<double>(t.snapshots_replaced),
-              static_cast<double>(s.snapshots_replaced));
+              MetricType::Counter, [](const WorldStats& s) { return s.snapshots_replaced; });
     per_world("sportsim_resyncs_total",
               "Readers that fell more than --watcher_backlog events behind (sent the full state)",
-              MetricType::Counter, static_cast<double>(t.resyncs),
-              static_cast<double>(s.resyncs));
+              MetricType::Counter, [](const WorldStats& s) { return s.resyncs; });
     per_world("sportsim_events_total", "World events queued to readers (shots, collisions, "
               "impacts, torques...)",
-              MetricType::Counter, static_cast<double>(t.events), static_cast<double>(s.events));
+              MetricType::Counter, [](const WorldStats& s) { return s.events; });
     {
       MetricFamily f = Family("sportsim_publish_to_write_seconds",
                               "From a tick's deadline to the start of its snapshot's write",
                               MetricType::Histogram);
-      AddHistogram(&f, tables_->publish_to_write(), table);
-      AddHistogram(&f, sessions_->publish_to_write(), session);
+      for (const Kind& k : kinds) AddHistogram(&f, *k.publish_to_write, {{"world", k.name}});
       out.push_back(std::move(f));
     }
     {
       MetricFamily f = Family("sportsim_swing_commands_total",
                               "DriveSwing torque commands applied", MetricType::Counter);
-      Add(&f, static_cast<double>(s.commands));
+      Add(&f, static_cast<double>(sessions.commands));
       out.push_back(std::move(f));
     }
     // Rejected inputs: RPCs ending with a caller-error code, and refused DriveSwing commands.
@@ -214,8 +215,8 @@ class Collector final : public prometheus::Collectable {
       if (IsRejection(key.second)) rejected[key.second] += n;
     }
     for (int c = 0; c < 17; ++c) {
-      if (s.refused_by_code[static_cast<size_t>(c)] > 0) {
-        rejected[c] += s.refused_by_code[static_cast<size_t>(c)];
+      if (sessions.refused_by_code[static_cast<size_t>(c)] > 0) {
+        rejected[c] += sessions.refused_by_code[static_cast<size_t>(c)];
       }
     }
     out.push_back(std::move(rpcs));

@@ -7,6 +7,8 @@
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "server/billiards/game_convert.h"
+#include "server/billiards/table_world.h"
 #include "server/world/world.h"
 #include "sim/billiards/rack.h"
 #include "sim/core/check.h"
@@ -25,6 +27,26 @@ std::string DefaultRack(std::string_view preset) {
 }
 
 }  // namespace
+
+void ShotSummaryToProto(const ShotSummary& s, v1::ShotSummary* out) {
+  out->set_shot_id(s.shot_id);
+  out->set_seat(s.seat);
+  out->set_struck_ball(s.struck_ball);
+  out->set_first_ball_hit(s.first_ball_hit);
+  out->set_rails_after_contact(s.rails_after_contact);
+  out->set_rails(s.rails);
+  for (const std::string& id : s.pocketed) out->add_pocketed(id);
+  out->set_struck_ball_pocketed(s.struck_ball_pocketed);
+  out->set_start_tick(s.start_tick);
+  out->set_end_tick(s.end_tick);
+  out->set_duration_s(s.duration_s);
+  out->set_events(s.events);
+  out->set_error(s.error);
+  if (s.verdict.has_value()) {
+    ShotCallToProto(s.call, out->mutable_call());
+    VerdictToProto(*s.verdict, out->mutable_verdict());
+  }
+}
 
 absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
   const std::string preset = setup.preset().empty() ? "pool-9ft" : setup.preset();
@@ -127,7 +149,7 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
           "solver.disable: unknown effect \"%s\" (GetInfo lists the effects)", name));
     }
     asked_off |= bit;
-    o.disabled |= bit;
+    o.effects = b::WithEffect(o.effects, bit, /*on=*/false);
   }
   for (const std::string& name : solver.enable()) {
     const uint32_t bit = b::EffectFromName(name);
@@ -139,10 +161,10 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
       return absl::InvalidArgumentError(
           absl::StrFormat("solver: effect \"%s\" is both enabled and disabled", name));
     }
-    o.disabled &= ~bit;
+    o.effects = b::WithEffect(o.effects, bit, /*on=*/true);
   }
   // Without an engine named, a scene with air drag (no closed form) gets the stepped engine.
-  if (solver.engine() == v1::ENGINE_UNSPECIFIED && (o.disabled & b::kEffectDrag) == 0) {
+  if (solver.engine() == v1::ENGINE_UNSPECIFIED && b::EffectOn(o.effects, b::kEffectEnableDrag)) {
     o.engine = b::Engine::kStepped;
   }
   if (absl::Status s = b::ValidateSolverOptions(o); !s.ok()) return PrefixStatus("solver.", s);
@@ -203,7 +225,7 @@ absl::StatusOr<ShotJob> ShotJobFromProto(const v1::SimulateShotRequest& request)
           "strike.ball: no ball \"%s\" on the table (place it with table.balls)", id));
     }
     absl::StatusOr<b::StrikeOutcome> out =
-        b::ApplyStrike(job.table.model, job.solver.disabled, *strike, cue, &state);
+        b::ApplyStrike(job.table.model, job.solver.effects, *strike, cue, &state);
     if (!out.ok()) return PrefixStatus("strike.", out.status());
     job.strike = *out;
   } else if (request.motions_size() > 0) {

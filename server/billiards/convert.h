@@ -19,6 +19,11 @@
 
 namespace sportsim::server {
 
+struct ShotSummary;  // table_world.h
+
+/// A table's shot summary as the API's message.
+void ShotSummaryToProto(const ShotSummary& s, v1::ShotSummary* out);
+
 /// Most balls a table may hold (snooker has 22).
 inline constexpr int kMaxBalls = 64;
 

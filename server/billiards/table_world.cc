@@ -6,6 +6,7 @@
 
 #include "absl/strings/str_format.h"
 #include "server/billiards/convert.h"
+#include "server/billiards/game_convert.h"
 #include "server/world/event_log.h"
 #include "server/world/watcher_impl.h"
 #include "server/world/world.h"
@@ -41,6 +42,7 @@ void TableWatch::Fill(const WatchOptions& options, const std::string& table_id,
   out->set_shot_id(frame.shot_id);
   out->set_heartbeat(frame.heartbeat);
   if (frame.heartbeat) return;
+  if (frame.game != nullptr) *out->mutable_game() = *frame.game;
   const bool all = full || !options.changed_only || last_sent == nullptr ||
                    last_sent->balls.size() != frame.balls.size();
   for (size_t i = 0; i < frame.balls.size(); ++i) {
@@ -58,138 +60,19 @@ void TableWatch::Fill(const WatchOptions& options, const std::string& table_id,
 template class BasicWatcher<TableWatch>;
 
 // ---------------------------------------------------------------------------------------------
-// Table
-
-struct Table : Ticked, std::enable_shared_from_this<Table> {
-  explicit Table(TableRegistry* r) : registry(r) {}
-  void Wake(uint64_t generation, SteadyClock::time_point now) override {
-    registry->Process(shared_from_this(), generation, now);
-  }
-
-  TableRegistry* const registry;
-  // Fixed at creation.
-  std::string id;
-  std::string preset;
-  std::string rack;
-  std::shared_ptr<const b::TableModel> model;
-  b::TableState initial;
-  b::SolverOptions solver;
-  double tick_hz = 120.0;  // == clock.tick_hz
-  double period_s = 1.0 / 120.0;
-  int64_t steps_per_tick = 0;  // stepped engine: dt_s * steps_per_tick = period
-  std::vector<SeatEntry> seats;
-
-  absl::Mutex mu;
-  TickClock clock ABSL_GUARDED_BY(mu);
-  int64_t tick ABSL_GUARDED_BY(mu) = 0;                 // last tick advanced or acted on
-  uint64_t sequence ABSL_GUARDED_BY(mu) = 0;
-  uint32_t turn ABSL_GUARDED_BY(mu) = 0;
-  b::TableState rest ABSL_GUARDED_BY(mu);                // the balls when no shot moves
-  std::unique_ptr<b::TableSimulation> sim ABSL_GUARDED_BY(mu);  // the shot in progress
-  std::unique_ptr<b::ShotReferee> referee ABSL_GUARDED_BY(mu);
-  b::TableState shot_start ABSL_GUARDED_BY(mu);  // ids for the shot's events
-  v1::ShotSummary current ABSL_GUARDED_BY(mu);   // the shot in progress
-  v1::ShotSummary last_shot ABSL_GUARDED_BY(mu);
-  uint64_t shots ABSL_GUARDED_BY(mu) = 0;
-  EventLog<v1::TableEvent> log ABSL_GUARDED_BY(mu);
-  std::vector<std::shared_ptr<Watcher>> watchers ABSL_GUARDED_BY(mu);
-  bool deleted ABSL_GUARDED_BY(mu) = false;
-  bool closed ABSL_GUARDED_BY(mu) = false;  // the server is shutting down
-
-  absl::Status Gone() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    if (closed) return absl::UnavailableError("the server is shutting down");
-    if (deleted) return absl::NotFoundError(absl::StrFormat("table_id: table %s was deleted", id));
-    return absl::OkStatus();
-  }
-  uint64_t wake_generation ABSL_GUARDED_BY(mu) = 0;
-
-  SteadyClock::time_point Deadline(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    return clock.Deadline(k);
-  }
-  // The tick the clock is at (never behind the last tick advanced).
-  int64_t ClockTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    return clock.Tick(now, tick);
-  }
-  // The tick now: the last one advanced while a shot moves, else the clock's.
-  int64_t NowTick() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    return sim != nullptr ? tick : ClockTick(SteadyClock::now());
-  }
-  double TableTime(int64_t k) const { return static_cast<double>(k) * period_s; }
-  // The shot's own time at tick k.
-  double ShotTime(int64_t k) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    const int64_t n = k - current.start_tick();
-    if (steps_per_tick > 0) return static_cast<double>(n * steps_per_tick) * solver.dt_s;
-    return static_cast<double>(n) * period_s;
-  }
-  const b::TableState& Balls() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    return sim != nullptr ? sim->state() : rest;
-  }
-  // `ticked`: made by a tick, whose latency counts from the tick's deadline (a late tick counts
-  // as late); frames made by calls count from now.
-  std::shared_ptr<const Frame> MakeFrame(int64_t k, bool heartbeat, bool ticked = false)
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    auto f = std::make_shared<Frame>();
-    f->sequence = sequence;
-    f->tick = k;
-    f->t_s = TableTime(k);
-    f->at_rest = sim == nullptr;
-    f->heartbeat = heartbeat;
-    f->turn = turn;
-    f->shot_id = current.shot_id();
-    f->model = model;
-    if (!heartbeat) f->balls = Balls().balls;
-    f->published = ticked ? Deadline(k) : SteadyClock::now();
-    return f;
-  }
-  // The shot's physics events, in table time, logged; the referee sees each.
-  void LogShotEvents(const std::vector<b::Event>& events, int event_log,
-                     std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    const double start_t = TableTime(current.start_tick());
-    for (const b::Event& be : events) {
-      referee->Observe(be);
-      v1::TableEvent pe;
-      EventToProto(*model, shot_start, be, &pe);
-      pe.set_t_s(start_t + be.t_s);
-      pe.set_shot_id(current.shot_id());
-      fresh->push_back(Log(std::move(pe), event_log));
-    }
-  }
-  // Offers a frame (or none: the events wait) and the events to every watcher; returns those
-  // to pump once the lock is released.
-  void OfferAll(const std::shared_ptr<const Frame>& frame, const std::vector<EventPtr>& fresh,
-                std::vector<std::shared_ptr<Watcher>>* pump) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    for (const std::shared_ptr<Watcher>& w : watchers) {
-      if (w->Offer(frame, fresh)) pump->push_back(w);
-    }
-  }
-  // The seat of `token`, which must be the seat to play when `to_play`. Also refuses a table
-  // deleted or shutting down.
-  absl::StatusOr<int> Authorize(const std::string& token, bool to_play) const
-      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    if (absl::Status gone = Gone(); !gone.ok()) return gone;
-    const int seat = SeatOf(seats, token);
-    if (seat < 0) return absl::PermissionDeniedError("token: not a seat of this table");
-    if (to_play && seat != static_cast<int>(turn)) {
-      return absl::PermissionDeniedError(
-          absl::StrFormat("token: it is seat %d's turn, not seat %d's", turn, seat));
-    }
-    return seat;
-  }
-  EventPtr Log(v1::TableEvent e, int event_log) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
-    return log.Append(std::move(e), sequence, event_log);
-  }
-};
+// The table kind
 
 namespace {
 
-absl::Status Unavailable() { return absl::UnavailableError("the server is shutting down"); }
+// The shot's own time at tick k.
+double ShotTime(const Table& t, int64_t k) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  const int64_t n = k - t.current.start_tick;
+  if (t.steps_per_tick > 0) return static_cast<double>(n * t.steps_per_tick) * t.solver.dt_s;
+  return static_cast<double>(n) * t.period_s;
+}
 
-absl::Status CheckTableId(const std::string& id) {
-  if (id.empty() || id.size() > 64) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "table_id must be 1 to 64 characters, got %d characters", static_cast<int>(id.size())));
-  }
-  return absl::OkStatus();
+const b::TableState& Balls(const Table& t) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  return t.sim != nullptr ? t.sim->state() : t.rest;
 }
 
 v1::TableEvent TableEvent(v1::EventKind kind, double t_s, uint64_t shot_id) {
@@ -200,8 +83,270 @@ v1::TableEvent TableEvent(v1::EventKind kind, double t_s, uint64_t shot_id) {
   return e;
 }
 
+// A table that plays a ruled game (a referee decides what every shot means).
+bool Ruled(const Table& t) { return t.game_referee != nullptr; }
+
+// The seed of shot n's noise, from the table's secret seed: SplitMix64's finalizer (Steele,
+// Lea & Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014) over
+// seed + n * golden ratio, so that consecutive shots get unrelated seeds.
+uint64_t ShotSeed(uint64_t seed, uint64_t shot) {
+  uint64_t z = seed + shot * 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// The ball a seat strikes: its own cue ball (three-cushion: seat 0 "cue", seat 1 "yellow").
+std::string StrikerBall(const Table& t, int seat) {
+  return t.rules.game == games::GameKind::kThreeCushion && seat == 1 ? "yellow" : "cue";
+}
+
+// The API's view of the game state, made once per change and shared by every frame.
+void RefreshGameView(Table& t) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  if (!Ruled(t)) return;
+  auto view = std::make_shared<v1::GameState>();
+  std::optional<double> deadline_s;
+  if (t.clock_deadline.has_value()) deadline_s = t.WorldTime(*t.clock_deadline);
+  GameStateToProto(t.game, deadline_s, view.get());
+  t.game_view = std::move(view);
+}
+
+// The shot clock of the seat to play starts at tick `from` (when it is on, the match goes on
+// and nobody has a decision to make).
+void ArmShotClock(Table& t, int64_t from) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  t.clock_deadline.reset();
+  if (!Ruled(t) || t.rules.shot_clock_s <= 0 || t.game.match_over() ||
+      t.game.decision.pending()) {
+    return;
+  }
+  const int64_t ticks = std::max<int64_t>(
+      1, static_cast<int64_t>(std::ceil(t.rules.shot_clock_s * t.tick_hz - 1e-9)));
+  t.clock_deadline = from + ticks;
+}
+
+// A referee's judgement takes effect at `tick`: the game state, its events (logged in order),
+// the turn, the shot clock and the view.
+void ApplyJudgement(Table& t, games::Judgement j, int64_t tick, uint64_t shot_id,
+                    std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  t.game = std::move(j.state);
+  for (const games::GameEvent& ge : j.events) {
+    fresh->push_back(t.Log(GameEventToProto(ge, t.WorldTime(tick), shot_id)));
+  }
+  const uint32_t to_play = static_cast<uint32_t>(t.game.to_play);
+  if (to_play != t.turn) {
+    t.turn = to_play;
+    v1::TableEvent e;
+    e.set_kind(v1::turn);
+    e.set_t_s(t.WorldTime(tick));
+    e.set_shot_id(shot_id);
+    e.set_seat(t.turn);
+    fresh->push_back(t.Log(std::move(e)));
+  }
+  ArmShotClock(t, tick);
+  RefreshGameView(t);
+}
+
+// The shot's physics events, in table time, logged; the referee sees each.
+void LogShotEvents(Table& t, const std::vector<b::Event>& events,
+                   std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  const double start_t = t.WorldTime(t.current.start_tick);
+  for (const b::Event& be : events) {
+    t.referee->Observe(be);
+    if (Ruled(t)) t.shot_events.push_back(be);
+    v1::TableEvent pe;
+    EventToProto(*t.model, t.shot_start, be, &pe);
+    pe.set_t_s(start_t + be.t_s);
+    pe.set_shot_id(t.current.shot_id);
+    fresh->push_back(t.Log(std::move(pe)));
+  }
+}
+
+// Ends the shot in progress: a summary, the shot_end event, the balls at rest.
+void EndShot(TableHost& host, Table& t, int64_t end_tick, const TableKind::End& end,
+             std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  if (t.sim == nullptr) return;
+  // A failed engine (non-finite state, event cap) voids the shot: the balls go back.
+  b::TableState state = end.voided ? t.shot_start : t.sim->state();
+  if (!end.error.empty() && !end.voided) {
+    // Frozen where the engine stopped: every ball still moving is put at rest.
+    for (b::Ball& ball : state.balls) {
+      if (ball.state == b::MotionState::kPocketed) continue;
+      ball.v.setZero();
+      ball.w.setZero();
+      ball.state = b::MotionState::kStationary;
+    }
+  }
+  state.t_s = 0.0;
+  ShotSummary& s = t.current;
+  if (t.referee != nullptr) {
+    const b::ShotFacts& f = t.referee->facts();
+    if (f.first_hit >= 0) s.first_ball_hit = state.balls[f.first_hit].id;
+    s.rails = static_cast<uint32_t>(f.rails);
+    s.rails_after_contact = static_cast<uint32_t>(f.rails_after_contact);
+    for (int i : f.pocketed) s.pocketed.push_back(state.balls[i].id);
+    s.struck_ball_pocketed = f.struck_pocketed;
+  }
+  s.end_tick = end_tick;
+  s.duration_s = ShotTime(t, end_tick);
+  s.events = t.sim->events_processed();
+  s.error = end.error;
+  std::optional<games::Judgement> judged;
+  if (Ruled(t) && !end.voided) {
+    // The referee reads the engine's own events and the balls at rest; it may respot balls
+    // or rack the next frame.
+    games::ShotRecord record{.struck = t.shot_start.Find(s.struck_ball),
+                             .placed = t.placed,
+                             .before = t.shot_start,
+                             .events = std::move(t.shot_events),
+                             .after = state};
+    judged = t.game_referee->Judge(t.rules, *t.model, t.game, s.call, record, &state);
+    s.verdict = judged->verdict;
+    for (auto it = t.record.rbegin(); it != t.record.rend(); ++it) {
+      if (it->kind == MatchEntry::Kind::kShoot && it->shot_id == s.shot_id) {
+        it->verdict = judged->verdict;
+        break;
+      }
+    }
+    t.placed = false;
+  }
+  t.shot_events.clear();
+  t.last_shot = s;
+  t.rest = std::move(state);
+  t.sim = nullptr;
+  t.referee = nullptr;
+  host.RunEnded();
+  v1::TableEvent e = TableEvent(v1::shot_end, t.WorldTime(end_tick), s.shot_id);
+  e.set_seat(s.seat);
+  e.add_balls(s.struck_ball);
+  ShotSummaryToProto(s, e.mutable_summary());
+  fresh->push_back(t.Log(std::move(e)));
+  if (judged.has_value()) {
+    ApplyJudgement(t, *std::move(judged), end_tick, s.shot_id, fresh);
+  } else if (Ruled(t)) {
+    // A voided shot: the balls went back and the same seat plays again.
+    ArmShotClock(t, end_tick);
+    RefreshGameView(t);
+  }
+}
+
+}  // namespace
+
+bool TableKind::Running(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS { return t.sim != nullptr; }
+
+std::optional<TableKind::End> TableKind::AdvanceTick(TableHost& /*host*/, Table& t, int64_t k,
+                                                     TickOut* out) {
+  const double shot_t = ShotTime(t, k);
+  if (const absl::Status st = t.sim->AdvanceTo(shot_t, &out->events); !st.ok()) {
+    return End{.error = absl::StrFormat("%s; the balls were put back where the shot started",
+                                        st.message()),
+               .voided = true};
+  }
+  if (t.sim->AtRest()) return End{};
+  if (shot_t >= t.max_shot_s) {
+    return End{.error = absl::StrFormat("the shot was stopped after %g s of simulated time",
+                                        t.max_shot_s)};
+  }
+  return std::nullopt;
+}
+
+void TableKind::Publish(TableHost& /*host*/, Table& t, TickOut* out,
+                        std::vector<EventPtr>* fresh) {
+  LogShotEvents(t, out->events, fresh);
+}
+
+void TableKind::EndRun(TableHost& host, Table& t, const End& end, std::vector<EventPtr>* fresh,
+                       Table::Pump* /*pump*/) {
+  EndShot(host, t, t.tick, end, fresh);
+}
+
+std::optional<int64_t> TableKind::RestDeadline(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+  if (!Ruled(t) || t.sim != nullptr) return std::nullopt;
+  return t.clock_deadline;
+}
+
+void TableKind::AtRestDeadline(TableHost& /*host*/, Table& t, std::vector<EventPtr>* fresh) {
+  const int seat = t.game.to_play;
+  t.clock_deadline.reset();
+  b::TableState balls = t.rest;
+  absl::StatusOr<games::Judgement> j =
+      t.game_referee->ShotClockExpired(t.rules, *t.model, t.game, &balls);
+  if (!j.ok()) {
+    RefreshGameView(t);
+    return;
+  }
+  t.rest = std::move(balls);
+  t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShotClock, .tick = t.tick,
+                                .seat = seat, .verdict = j->verdict});
+  ApplyJudgement(t, *std::move(j), t.tick, t.current.shot_id, fresh);
+}
+
+std::shared_ptr<const Frame> TableKind::MakeFrame(const Table& t, int64_t k, bool heartbeat,
+                                                  SteadyClock::time_point published)
+    ABSL_NO_THREAD_SAFETY_ANALYSIS {
+  auto f = std::make_shared<Frame>();
+  f->sequence = t.sequence;
+  f->tick = k;
+  f->t_s = t.WorldTime(k);
+  f->at_rest = t.sim == nullptr;
+  f->heartbeat = heartbeat;
+  f->turn = t.turn;
+  f->shot_id = t.current.shot_id;
+  f->model = t.model;
+  if (!heartbeat) {
+    f->balls = Balls(t).balls;
+    f->game = t.game_view;
+  }
+  f->published = published;
+  return f;
+}
+
+namespace {
+
 // The largest step <= 1/960 s that divides the tick period (the stepped engine's default).
 constexpr double kDefaultSteppedDt = 1.0 / 960.0;
+
+// The seat a call acts for. A seat acts for itself (and must be the seat to play when
+// `to_play`); the admin token acts for the seat to play in free play, and never plays in a
+// ruled game.
+absl::StatusOr<int> ActingSeat(const Table& t, int seat, bool to_play)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  if (seat == kAdminSeat) {
+    if (t.game_referee != nullptr) {
+      return absl::PermissionDeniedError(
+          "token: the admin token does not play in a ruled game; use a seat's token");
+    }
+    return static_cast<int>(t.turn);
+  }
+  if (to_play && seat != static_cast<int>(t.turn)) {
+    return absl::PermissionDeniedError(
+        absl::StrFormat("token: it is seat %d's turn, not seat %d's", t.turn, seat));
+  }
+  return seat;
+}
+
+// A call's judgement (a decision, a concession) takes effect now: the balls, the record, the
+// game state and its events, offered to every reader; the rest timers restart.
+void ApplyCallJudgement(TableHost& host, Table& t, games::Judgement j, b::TableState balls,
+                        MatchEntry entry, Table::Pump* pump) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  const int64_t tick = t.ClockTick(SteadyClock::now());
+  t.tick = tick;
+  ++t.sequence;
+  t.rest = std::move(balls);
+  t.placed = false;
+  entry.tick = tick;
+  t.record.push_back(std::move(entry));
+  std::vector<EventPtr> fresh;
+  ApplyJudgement(t, std::move(j), tick, t.current.shot_id, &fresh);
+  host.CountEvents(fresh.size());
+  t.OfferAll(t.MakeFrame(tick, false), fresh, pump);
+  host.ScheduleRest(t);
+}
+
+// A random 64-bit seed (the table's secret noise seed when the creator names none).
+uint64_t RandomSeed() {
+  const std::string hex = RandomHex(8);
+  return std::stoull(hex, nullptr, 16);
+}
 
 }  // namespace
 
@@ -209,31 +354,9 @@ constexpr double kDefaultSteppedDt = 1.0 / 960.0;
 // Registry
 
 TableRegistry::TableRegistry(TableLimits limits, TickScheduler* scheduler)
-    : limits_(limits), counters_(std::make_shared<WatchCounters>()) {
-  if (scheduler == nullptr) {
-    own_scheduler_ = std::make_unique<TickScheduler>(limits_.workers);
-    scheduler = own_scheduler_.get();
-  }
-  scheduler_ = scheduler;
-}
+    : limits_(limits), host_(limits.world, scheduler) {}
 
 TableRegistry::~TableRegistry() { Shutdown(absl::UnavailableError("the server is shutting down")); }
-
-absl::StatusOr<std::shared_ptr<Table>> TableRegistry::Find(const std::string& id) {
-  if (absl::Status s = CheckTableId(id); !s.ok()) return s;
-  absl::MutexLock lock(&mu_);
-  if (shut_down_) return Unavailable();
-  auto it = tables_.find(id);
-  if (it == tables_.end()) {
-    return absl::NotFoundError(absl::StrFormat("table_id: no table \"%s\"", id));
-  }
-  return it->second;
-}
-
-void TableRegistry::Schedule(Table& t, const std::shared_ptr<Table>& ptr,
-                             SteadyClock::time_point when) {
-  scheduler_->Schedule(ptr, ++t.wake_generation, when);
-}
 
 absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
     const v1::CreateTableRequest& request) {
@@ -241,18 +364,45 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 1000, false); !s.ok()) {
     return s;
   }
+  absl::StatusOr<GameSetup> game = GameSetupFromProto(request.game());
+  if (!game.ok()) return game.status();
+  const bool ruled = game->rules.game != games::GameKind::kFree;
+  if (ruled && ((request.seats() != 0 && request.seats() != 2) ||
+                (request.seat_names_size() != 0 && request.seat_names_size() != 2))) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "seats: a %s table has 2 seats, got %d", games::GameName(game->rules.game),
+        std::max<int>(static_cast<int>(request.seats()), request.seat_names_size())));
+  }
   absl::StatusOr<std::vector<SeatEntry>> seats =
       MakeSeats(request.seats(), request.seat_names(), /*default_count=*/2);
   if (!seats.ok()) return seats.status();
-  absl::StatusOr<TableBuild> build = TableFromProto(request.table());
+  v1::TableSetup setup = request.table();
+  if (ruled) {
+    // A ruled game is played on its own table; a break starts from its own rack, racked by
+    // the referee, and a position in play from the balls given.
+    if (setup.preset().empty()) setup.set_preset(GamePreset(game->rules.game));
+    if (setup.rack().empty()) setup.set_rack("empty");
+  }
+  absl::StatusOr<TableBuild> build = TableFromProto(setup);
   if (!build.ok()) return build.status();
   absl::StatusOr<b::SolverOptions> solver = SolverFromProto(request.solver());
   if (!solver.ok()) return solver.status();
+  if (ruled) {
+    const uint32_t needed = game->rules.game == games::GameKind::kThreeCushion
+                                ? b::kEffectDisableCushions
+                                : b::kEffectDisableCushions | b::kEffectDisablePockets;
+    if ((solver->effects & needed) != 0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "solver.disable: %s needs its cushions%s; they cannot be disabled",
+          games::GameName(game->rules.game),
+          game->rules.game == games::GameKind::kThreeCushion ? "" : " and pockets"));
+    }
+  }
 
-  auto table = std::make_shared<Table>(this);
+  const std::shared_ptr<Table> table = host_.Make();
   table->tick_hz = tick_hz;
-  table->clock.tick_hz = tick_hz;
   table->period_s = 1.0 / tick_hz;
+  table->max_shot_s = limits_.max_shot_s;
   if (solver->engine == b::Engine::kStepped) {
     // Ticks must end on the step grid, so that a shot's states do not depend on the ticks.
     if (!request.solver().has_dt_s()) {
@@ -275,39 +425,64 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
         b::TableSimulation::Create(build->model, *solver, build->state, &ignored);
     if (!probe.ok()) return PrefixStatus("solver: ", probe.status());
   }
-  table->preset = request.table().preset().empty() ? "pool-9ft" : request.table().preset();
+  table->preset = setup.preset().empty() ? "pool-9ft" : setup.preset();
   table->rack = build->rack;
   table->model = std::make_shared<const b::TableModel>(std::move(build->model));
-  table->initial = build->state;
   table->solver = *solver;
+  table->rules = game->rules;
+  table->start = game->start;
+  table->noise = game->noise;
+  table->seed = game->seed.has_value() ? *game->seed : RandomSeed();
+  std::optional<games::GameState> state;
+  if (ruled) {
+    table->game_referee = games::RefereeFor(game->rules.game);
+    if (table->game_referee == nullptr) {
+      return absl::UnimplementedError(absl::StrFormat(
+          "game.name: %s has no referee in this build", games::GameName(game->rules.game)));
+    }
+    absl::StatusOr<games::GameState> started =
+        games::StartMatch(game->rules, *table->model, game->start, &build->state);
+    if (!started.ok()) return PrefixStatus("game: ", started.status());
+    started->seed = ShotSeed(table->seed, 0);
+    state = *std::move(started);
+    if (game->start == games::Start::kBreak) table->rack = GameRack(game->rules.game);
+  }
+  table->initial = build->state;
+  table->create_request = request.SerializeAsString();
   v1::CreateTableResponse response;
   table->seats = *std::move(seats);
+  table->admin_token = RandomHex(16);
   SeatsToProto(table->seats, /*with_tokens=*/true, response.mutable_seats());
+  response.set_admin_token(table->admin_token);
   {
     absl::MutexLock lock(&table->mu);
+    table->clock.tick_hz = tick_hz * host_.limits().clock_rate;
     table->clock.origin = SteadyClock::now();
     table->rest = table->initial;
+    if (state.has_value()) {
+      table->game = *std::move(state);
+      table->turn = static_cast<uint32_t>(table->game.to_play);
+      ArmShotClock(*table, 0);
+      RefreshGameView(*table);
+      *response.mutable_game() = *table->game_view;
+    }
   }
-  absl::MutexLock lock(&mu_);
-  if (shut_down_) return Unavailable();
-  if (static_cast<int>(tables_.size()) >= limits_.max_tables) {
-    return absl::ResourceExhaustedError(absl::StrFormat(
-        "the server holds its maximum of %d tables (--max_tables)", limits_.max_tables));
-  }
-  do {
-    table->id = "t-" + RandomHex(6);
-  } while (tables_.count(table->id) > 0);
-  tables_[table->id] = table;
+  if (absl::Status s = host_.Add(table); !s.ok()) return s;
   response.set_table_id(table->id);
   response.set_tick_hz(tick_hz);
   response.set_engine(std::string(b::EngineName(solver->engine)));
   if (solver->engine == b::Engine::kStepped) response.set_dt_s(solver->dt_s);
   response.set_tick(0);
+  // A clock that runs while nobody shoots needs a wake at its deadline.
+  if (ruled && game->rules.shot_clock_s > 0) {
+    absl::MutexLock lock(&table->mu);
+    host_.ScheduleRest(*table);
+  }
   return response;
 }
 
 absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& request) {
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
+  absl::StatusOr<std::shared_ptr<Table>> found = host_.Find(request.table_id());
   if (!found.ok()) return found.status();
   Table& t = **found;
   absl::MutexLock lock(&t.mu);
@@ -318,189 +493,103 @@ absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& requ
   info.set_tick_hz(t.tick_hz);
   const int64_t tick = t.NowTick();
   info.set_tick(tick);
-  info.set_t_s(t.TableTime(tick));
+  info.set_t_s(t.WorldTime(tick));
   info.set_sequence(t.sequence);
   info.set_at_rest(t.sim == nullptr);
   info.set_turn(t.turn);
   SeatsToProto(t.seats, /*with_tokens=*/false, info.mutable_seats());
-  for (const b::Ball& ball : t.Balls().balls) BallToProto(*t.model, ball, info.add_balls());
+  for (const b::Ball& ball : Balls(t).balls) BallToProto(*t.model, ball, info.add_balls());
   info.set_shots(t.shots);
-  if (t.shots > 0) *info.mutable_last_shot() = t.last_shot;
+  if (t.shots > 0) ShotSummaryToProto(t.last_shot, info.mutable_last_shot());
   info.set_watchers(static_cast<uint32_t>(t.watchers.size()));
   info.set_engine(std::string(b::EngineName(t.solver.engine)));
   if (t.solver.engine == b::Engine::kStepped) info.set_dt_s(t.solver.dt_s);
   if (request.include_geometry()) GeometryToProto(*t.model, info.mutable_geometry());
+  if (t.game_view != nullptr) *info.mutable_game() = *t.game_view;
   return info;
 }
 
 absl::StatusOr<v1::ListTablesResponse> TableRegistry::List(const v1::ListTablesRequest& request) {
-  if (request.page_size() > 1000) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("page_size must be in [0, 1000], got %d", request.page_size()));
-  }
-  const size_t page = request.page_size() == 0 ? 100 : request.page_size();
-  std::vector<std::shared_ptr<Table>> tables;
   v1::ListTablesResponse response;
-  {
-    absl::MutexLock lock(&mu_);
-    if (shut_down_) return Unavailable();
-    response.set_total(static_cast<uint32_t>(tables_.size()));
-    for (auto it = tables_.upper_bound(request.page_token());
-         it != tables_.end() && tables.size() <= page; ++it) {
-      tables.push_back(it->second);
-    }
-  }
-  if (tables.size() > page) {
-    tables.pop_back();
-    response.set_next_page_token(tables.back()->id);
-  }
   const SteadyClock::time_point now = SteadyClock::now();
-  for (const std::shared_ptr<Table>& p : tables) {
-    Table& t = *p;
-    absl::MutexLock lock(&t.mu);
-    v1::TableBrief* brief = response.add_tables();
-    brief->set_table_id(t.id);
-    brief->set_preset(t.preset);
-    brief->set_at_rest(t.sim == nullptr);
-    brief->set_tick(t.sim != nullptr ? t.tick : t.ClockTick(now));
-    uint32_t on = 0;
-    for (const b::Ball& ball : t.Balls().balls) on += ball.state != b::MotionState::kPocketed;
-    brief->set_balls_on_table(on);
-    brief->set_seats(static_cast<uint32_t>(t.seats.size()));
-    brief->set_watchers(static_cast<uint32_t>(t.watchers.size()));
-    brief->set_shots(t.shots);
-  }
+  absl::StatusOr<uint32_t> total = host_.List(
+      PageRequest{.page_size = request.page_size(), .page_token = request.page_token()},
+      response.mutable_next_page_token(), [&](const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+        v1::TableBrief* brief = response.add_tables();
+        brief->set_table_id(t.id);
+        brief->set_preset(t.preset);
+        brief->set_at_rest(t.sim == nullptr);
+        brief->set_tick(t.sim != nullptr ? t.tick : t.ClockTick(now));
+        uint32_t on = 0;
+        for (const b::Ball& ball : Balls(t).balls) on += ball.state != b::MotionState::kPocketed;
+        brief->set_balls_on_table(on);
+        brief->set_seats(static_cast<uint32_t>(t.seats.size()));
+        brief->set_watchers(static_cast<uint32_t>(t.watchers.size()));
+        brief->set_shots(t.shots);
+      });
+  if (!total.ok()) return total.status();
+  response.set_total(*total);
   return response;
 }
 
 absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
-  if (absl::Status s = CheckTableId(request.table_id()); !s.ok()) return s;
-  if (absl::Status s = CheckToken(request.token(), "CreateTable"); !s.ok()) return s;
-  std::shared_ptr<Table> table;
-  {
-    absl::MutexLock lock(&mu_);
-    if (shut_down_) return Unavailable();
-    auto it = tables_.find(request.table_id());
-    if (it == tables_.end()) {
-      return absl::NotFoundError(absl::StrFormat("table_id: no table \"%s\"", request.table_id()));
-    }
-    table = it->second;
-    // The token is checked before anything changes.
-    if (SeatOf(table->seats, request.token()) < 0) {
-      return absl::PermissionDeniedError("token: not a seat of this table");
-    }
-    tables_.erase(it);
-  }
-  std::vector<std::shared_ptr<Watcher>> pump;
-  {
-    absl::MutexLock lock(&table->mu);
-    table->deleted = true;
-    if (table->sim != nullptr) moving_.fetch_sub(1);
-    const std::shared_ptr<const Frame> last =
-        table->MakeFrame(table->NowTick(),
-                         false);
-    const absl::Status gone =
-        absl::NotFoundError(absl::StrFormat("table %s was deleted", table->id));
-    for (const std::shared_ptr<Watcher>& w : table->watchers) {
-      if (w->Close(gone, last)) pump.push_back(w);
-    }
-    table->sim = nullptr;
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  return absl::OkStatus();
-}
-
-namespace {
-
-// Ends the shot in progress: a summary, the shot_end event, the balls at rest.
-void EndShot(Table& t, int64_t end_tick, const std::string& error, bool voided, int event_log,
-             std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
-  if (t.sim == nullptr) return;
-  // A failed engine (non-finite state, event cap) voids the shot: the balls go back.
-  b::TableState state = voided ? t.shot_start : t.sim->state();
-  if (!error.empty() && !voided) {
-    // Frozen where the engine stopped: every ball still moving is put at rest.
-    for (b::Ball& ball : state.balls) {
-      if (ball.state == b::MotionState::kPocketed) continue;
-      ball.v.setZero();
-      ball.w.setZero();
-      ball.state = b::MotionState::kStationary;
-    }
-  }
-  state.t_s = 0.0;
-  v1::ShotSummary& s = t.current;
-  if (t.referee != nullptr) {
-    const b::ShotFacts& f = t.referee->facts();
-    if (f.first_hit >= 0) s.set_first_ball_hit(state.balls[f.first_hit].id);
-    s.set_rails(static_cast<uint32_t>(f.rails));
-    s.set_rails_after_contact(static_cast<uint32_t>(f.rails_after_contact));
-    for (int i : f.pocketed) s.add_pocketed(state.balls[i].id);
-    s.set_struck_ball_pocketed(f.struck_pocketed);
-  }
-  s.set_end_tick(end_tick);
-  s.set_duration_s(t.ShotTime(end_tick));
-  s.set_events(t.sim->events_processed());
-  s.set_error(error);
-  t.last_shot = s;
-  t.rest = std::move(state);
-  t.sim = nullptr;
-  t.referee = nullptr;
-  v1::TableEvent e = TableEvent(v1::shot_end, t.TableTime(end_tick), s.shot_id());
-  e.set_seat(s.seat());
-  e.add_balls(s.struck_ball());
-  *e.mutable_summary() = s;
-  fresh->push_back(t.Log(std::move(e), event_log));
-}
-
-}  // namespace
-
-// The shape of every seat's call: check the token, find the table, then under its lock check
-// the seat (and the turn) and run `fn`, which offers to the watchers it names in `pump`; pump
-// them once the lock is released.
-template <typename Response, typename Fn>
-absl::StatusOr<Response> TableRegistry::Act(const std::string& table_id, const std::string& token,
-                                            bool to_play, Fn fn) {
-  if (absl::Status s = CheckToken(token, "CreateTable"); !s.ok()) return s;
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(table_id);
-  if (!found.ok()) return found.status();
-  std::vector<std::shared_ptr<Watcher>> pump;
-  absl::StatusOr<Response> response;
-  {
-    absl::MutexLock lock(&(*found)->mu);
-    absl::StatusOr<int> seat = (*found)->Authorize(token, to_play);
-    if (!seat.ok()) return seat.status();
-    response = fn(*found, *seat, pump);
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  return response;
+  return host_.Delete(
+      request.table_id(), request.token(),
+      [](const Table& t, int seat) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+        if (Ruled(t) && seat != kAdminSeat) {
+          return absl::PermissionDeniedError(
+              "token: in a ruled game only the admin token deletes the table");
+        }
+        return absl::OkStatus();
+      },
+      [&](Table& t, std::vector<EventPtr>* /*fresh*/, Table::Pump* /*pump*/)
+          ABSL_NO_THREAD_SAFETY_ANALYSIS {
+        if (t.sim != nullptr) host_.RunEnded();
+        t.sim = nullptr;
+      });
 }
 
 absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTableRequest& request) {
-  return Act<v1::ResetTableResponse>(
-      request.table_id(), request.token(), /*to_play=*/false,
+  return host_.Act<v1::ResetTableResponse>(
+      request.table_id(), request.token(),
       [&](const std::shared_ptr<Table>& ptr, int seat,
-          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::ResetTableResponse> {
+          Table::Pump& pump) -> absl::StatusOr<v1::ResetTableResponse> {
     Table& t = *ptr;
     v1::ResetTableResponse response;
+    if (Ruled(t) && seat != kAdminSeat) {
+      return absl::PermissionDeniedError(
+          "token: in a ruled game only the admin token resets the table");
+    }
+    std::optional<games::GameState> restarted;
+    b::TableState balls = t.initial;
+    if (Ruled(t)) {
+      // The match starts again from the creation's start.
+      absl::StatusOr<games::GameState> started =
+          games::StartMatch(t.rules, *t.model, t.start, &balls);
+      if (!started.ok()) return PrefixStatus("game: ", started.status());
+      started->seed = ShotSeed(t.seed, 0);
+      restarted = *std::move(started);
+    }
     const int64_t tick = t.NowTick();
     ++t.sequence;
     std::vector<EventPtr> fresh;
     if (t.sim != nullptr) {
-      EndShot(t, tick, "the table was reset during the shot", false, limits_.event_log, &fresh);
-      moving_.fetch_sub(1);
-      // The tick wake is void; the watchers (if any) get heartbeats again.
-      if (!t.watchers.empty()) {
-        Schedule(t, ptr, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
-      } else {
-        ++t.wake_generation;
-      }
+      EndShot(host_, t, tick, TableKind::End{.error = "the table was reset during the shot"},
+              &fresh);
+      host_.AfterRunEndedByCall(t);
     }
-    t.rest = t.initial;
+    t.rest = std::move(balls);
     t.tick = tick;
-    v1::TableEvent e = TableEvent(v1::table_reset, t.TableTime(tick), 0);
-    e.set_seat(static_cast<uint32_t>(seat));
-    fresh.push_back(t.Log(std::move(e), limits_.event_log));
-    events_.fetch_add(static_cast<int64_t>(fresh.size()));
+    t.placed = false;
+    v1::TableEvent e = TableEvent(v1::table_reset, t.WorldTime(tick), 0);
+    if (seat >= 0) e.set_seat(static_cast<uint32_t>(seat));
+    fresh.push_back(t.Log(std::move(e)));
+    if (restarted.has_value()) {
+      t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kReset, .tick = tick, .seat = seat});
+      ApplyJudgement(t, games::Judgement{.state = *std::move(restarted)}, tick, 0, &fresh);
+      host_.ScheduleRest(t);
+    }
+    host_.CountEvents(fresh.size());
     const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
     t.OfferAll(frame, fresh, &pump);
     response.set_sequence(t.sequence);
@@ -516,16 +605,27 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
     return absl::InvalidArgumentError(
         absl::StrFormat("ball: x_m and y_m must be finite, got (%g, %g)", p.x_m(), p.y_m()));
   }
-  return Act<v1::PlaceBallResponse>(
-      request.table_id(), request.token(), /*to_play=*/true,
+  return host_.Act<v1::PlaceBallResponse>(
+      request.table_id(), request.token(),
       [&](const std::shared_ptr<Table>& ptr, int seat,
-          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::PlaceBallResponse> {
+          Table::Pump& pump) -> absl::StatusOr<v1::PlaceBallResponse> {
     Table& t = *ptr;
+    absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/!Ruled(t));
+    if (!acting.ok()) return acting.status();
+    seat = *acting;
     v1::PlaceBallResponse response;
     if (t.sim != nullptr) {
       return absl::FailedPreconditionError(absl::StrFormat(
           "balls are still moving (shot %d); place balls when every ball is at rest",
-          t.current.shot_id()));
+          t.current.shot_id));
+    }
+    if (Ruled(t)) {
+      // Ball in hand only: the seat that has it, its own cue ball, inside the zone.
+      if (absl::Status s = t.game_referee->CheckPlacement(
+              t.rules, *t.model, t.game, seat, t.rest, p.id(), Eigen::Vector2d(p.x_m(), p.y_m()));
+          !s.ok()) {
+        return s;
+      }
     }
     b::TableState state = t.rest;
     int k = state.Find(p.id());
@@ -557,11 +657,16 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
     t.tick = tick;
     t.rest = std::move(state);
     ++t.sequence;
-    v1::TableEvent e = TableEvent(v1::ball_placed, t.TableTime(tick), 0);
+    if (Ruled(t)) {
+      t.placed = true;
+      t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kPlace, .tick = tick, .seat = seat,
+                                    .ball = p.id(), .x_m = p.x_m(), .y_m = p.y_m()});
+    }
+    v1::TableEvent e = TableEvent(v1::ball_placed, t.WorldTime(tick), 0);
     e.set_seat(static_cast<uint32_t>(seat));
     e.add_balls(p.id());
-    std::vector<EventPtr> fresh{t.Log(std::move(e), limits_.event_log)};
-    events_.fetch_add(1);
+    std::vector<EventPtr> fresh{t.Log(std::move(e))};
+    host_.CountEvents(1);
     const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
     t.OfferAll(frame, fresh, &pump);
     response.set_sequence(t.sequence);
@@ -574,12 +679,44 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
   if (!request.has_strike()) return absl::InvalidArgumentError("strike: required");
   absl::StatusOr<b::CueStrike> strike = StrikeFromProto(request.strike());
   if (!strike.ok()) return strike.status();
-  return Act<v1::ShootResponse>(
-      request.table_id(), request.token(), /*to_play=*/true,
+  return host_.Act<v1::ShootResponse>(
+      request.table_id(), request.token(),
       [&](const std::shared_ptr<Table>& ptr, int seat,
-          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::ShootResponse> {
+          Table::Pump& pump) -> absl::StatusOr<v1::ShootResponse> {
     Table& t = *ptr;
+    absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/!Ruled(t));
+    if (!acting.ok()) return acting.status();
+    seat = *acting;
     v1::ShootResponse response;
+    b::CueStrike struck = *strike;
+    const games::ShotCall call = ShotCallFromProto(request.call());
+    if (Ruled(t)) {
+      if (request.has_next_seat()) {
+        return absl::FailedPreconditionError(
+            "next_seat: in a ruled game the referee decides who plays next");
+      }
+      const std::string own = StrikerBall(t, seat);
+      if (!request.strike().ball().empty() && request.strike().ball() != own) {
+        return absl::FailedPreconditionError(absl::StrFormat(
+            "strike.ball: seat %d strikes only its own cue ball \"%s\"", seat, own));
+      }
+      if (request.strike().noise() != 0 || request.strike().seed() != 0) {
+        return absl::FailedPreconditionError(
+            "strike.noise, strike.seed: in a ruled game the table's noise applies, with a seed "
+            "no shooter chooses");
+      }
+      if (t.sim == nullptr) {
+        if (absl::Status s =
+                t.game_referee->CheckShot(t.rules, *t.model, t.game, seat, call, t.rest);
+            !s.ok()) {
+          return s;
+        }
+      }
+      struck.noise = t.noise;
+      struck.seed = ShotSeed(t.seed, t.shots + 1);
+    } else if (request.has_call()) {
+      return absl::FailedPreconditionError("call: free play has no referee to call a shot to");
+    }
     if (request.has_next_seat() && request.next_seat() >= t.seats.size()) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "next_seat must be in [0, %d], got %d", t.seats.size() - 1, request.next_seat()));
@@ -587,9 +724,11 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     if (t.sim != nullptr) {
       return absl::FailedPreconditionError(absl::StrFormat(
           "balls are still moving (shot %d): shoot when every ball is at rest",
-          t.current.shot_id()));
+          t.current.shot_id));
     }
-    const std::string id = request.strike().ball().empty() ? "cue" : request.strike().ball();
+    const std::string id = Ruled(t)                         ? StrikerBall(t, seat)
+                           : request.strike().ball().empty() ? "cue"
+                                                             : request.strike().ball();
     const int cue = t.rest.Find(id);
     if (cue < 0) {
       return absl::InvalidArgumentError(
@@ -602,7 +741,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     b::TableState state = t.rest;
     state.t_s = 0.0;
     absl::StatusOr<b::StrikeOutcome> outcome =
-        b::ApplyStrike(*t.model, t.solver.disabled, *strike, cue, &state);
+        b::ApplyStrike(*t.model, t.solver.effects, struck, cue, &state);
     if (!outcome.ok()) return PrefixStatus("strike.", outcome.status());
     std::vector<b::Event> events;
     absl::StatusOr<std::unique_ptr<b::TableSimulation>> sim =
@@ -616,45 +755,58 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     ++t.sequence;
     ++t.shots;
     const uint64_t shot_id = t.shots;
-    t.current.Clear();
-    t.current.set_shot_id(shot_id);
-    t.current.set_seat(static_cast<uint32_t>(seat));
-    t.current.set_struck_ball(id);
-    t.current.set_start_tick(start);
+    t.current = ShotSummary{.shot_id = shot_id, .seat = static_cast<uint32_t>(seat),
+                            .struck_ball = id, .start_tick = start, .call = call};
+    if (Ruled(t)) {
+      t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShoot, .tick = start,
+                                    .seat = seat, .strike = request.strike().SerializeAsString(),
+                                    .call = call, .shot_id = shot_id, .seed = struck.seed,
+                                    .applied = *outcome});
+      t.clock_deadline.reset();
+      t.shot_events.clear();
+      RefreshGameView(t);
+    }
     t.sim = *std::move(sim);
     t.referee = std::make_unique<b::ShotReferee>(cue);
     t.shot_start = t.rest;
-    moving_.fetch_add(1);
+    host_.RunStarted();
     std::vector<EventPtr> fresh;
-    v1::TableEvent e = TableEvent(v1::shot, t.TableTime(start), shot_id);
+    v1::TableEvent e = TableEvent(v1::shot, t.WorldTime(start), shot_id);
     e.set_seat(static_cast<uint32_t>(seat));
     e.add_balls(id);
-    fresh.push_back(t.Log(std::move(e), limits_.event_log));
-    t.LogShotEvents(events, limits_.event_log, &fresh);
+    fresh.push_back(t.Log(std::move(e)));
+    LogShotEvents(t, events, &fresh);
     if (request.has_next_seat() && request.next_seat() != t.turn) {
       t.turn = request.next_seat();
-      v1::TableEvent te = TableEvent(v1::turn, t.TableTime(start), shot_id);
+      v1::TableEvent te = TableEvent(v1::turn, t.WorldTime(start), shot_id);
       te.set_seat(t.turn);
-      fresh.push_back(t.Log(std::move(te), limits_.event_log));
+      fresh.push_back(t.Log(std::move(te)));
     }
-    events_.fetch_add(static_cast<int64_t>(fresh.size()));
+    host_.CountEvents(fresh.size());
     const std::shared_ptr<const Frame> frame = t.MakeFrame(start, false);
     t.OfferAll(frame, fresh, &pump);
     response.set_shot_id(shot_id);
     response.set_start_tick(start);
     StrikeReportToProto(*outcome, response.mutable_strike());
-    Schedule(t, ptr, t.Deadline(start + 1));
+    host_.ScheduleNextTick(t);
     return response;
   });
 }
 
 absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequest& request) {
   // Only the seat to play passes the turn.
-  return Act<v1::SetTurnResponse>(
-      request.table_id(), request.token(), /*to_play=*/true,
-      [&](const std::shared_ptr<Table>& ptr, int /*seat*/,
-          std::vector<std::shared_ptr<Watcher>>& pump) -> absl::StatusOr<v1::SetTurnResponse> {
+  return host_.Act<v1::SetTurnResponse>(
+      request.table_id(), request.token(),
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          Table::Pump& pump) -> absl::StatusOr<v1::SetTurnResponse> {
     Table& t = *ptr;
+    if (Ruled(t)) {
+      return absl::FailedPreconditionError(
+          "turn: in a ruled game the referee decides who plays next; nobody sets the turn");
+    }
+    if (absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/true); !acting.ok()) {
+      return acting.status();
+    }
     v1::SetTurnResponse response;
     if (request.seat() >= t.seats.size()) {
       return absl::InvalidArgumentError(absl::StrFormat("seat must be in [0, %d], got %d",
@@ -664,10 +816,10 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
       const int64_t tick = t.NowTick();
       ++t.sequence;
       t.turn = request.seat();
-      v1::TableEvent e = TableEvent(v1::turn, t.TableTime(tick), t.current.shot_id());
+      v1::TableEvent e = TableEvent(v1::turn, t.WorldTime(tick), t.current.shot_id);
       e.set_seat(t.turn);
-      std::vector<EventPtr> fresh{t.Log(std::move(e), limits_.event_log)};
-      events_.fetch_add(1);
+      std::vector<EventPtr> fresh{t.Log(std::move(e))};
+      host_.CountEvents(1);
       // At rest the turn goes out now; while balls move it rides with the next snapshot.
       const std::shared_ptr<const Frame> frame =
           t.sim == nullptr ? t.MakeFrame(tick, false) : nullptr;
@@ -678,23 +830,135 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequ
   });
 }
 
+absl::StatusOr<v1::DecideResponse> TableRegistry::Decide(const v1::DecideRequest& request) {
+  if (request.choice().empty() || request.choice().size() > 32) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "choice must be 1 to 32 characters, got %d: %s", request.choice().size(),
+        Quote(request.choice())));
+  }
+  return host_.Act<v1::DecideResponse>(
+      request.table_id(), request.token(),
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          Table::Pump& pump) -> absl::StatusOr<v1::DecideResponse> {
+    Table& t = *ptr;
+    if (!Ruled(t)) {
+      return absl::FailedPreconditionError("decide: free play has no decisions");
+    }
+    if (seat == kAdminSeat) {
+      return absl::PermissionDeniedError("token: a decision is the seat's, not the admin's");
+    }
+    if (t.sim != nullptr) {
+      return absl::FailedPreconditionError("balls are still moving: decide when they are at rest");
+    }
+    b::TableState balls = t.rest;
+    absl::StatusOr<games::Judgement> j =
+        t.game_referee->Decide(t.rules, *t.model, t.game, seat, request.choice(), &balls);
+    if (!j.ok()) return j.status();
+    ApplyCallJudgement(host_, t, *std::move(j), std::move(balls),
+                       MatchEntry{.kind = MatchEntry::Kind::kDecide, .seat = seat,
+                                  .choice = request.choice()},
+                       &pump);
+    v1::DecideResponse response;
+    response.set_sequence(t.sequence);
+    *response.mutable_game() = *t.game_view;
+    return response;
+  });
+}
+
+absl::StatusOr<v1::ConcedeResponse> TableRegistry::Concede(const v1::ConcedeRequest& request) {
+  return host_.Act<v1::ConcedeResponse>(
+      request.table_id(), request.token(),
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          Table::Pump& pump) -> absl::StatusOr<v1::ConcedeResponse> {
+    Table& t = *ptr;
+    if (!Ruled(t)) {
+      return absl::FailedPreconditionError("concede: free play has no frames to concede");
+    }
+    int conceding = seat;
+    if (seat == kAdminSeat) {
+      if (!request.has_seat() || request.seat() > 1) {
+        return absl::InvalidArgumentError(
+            "seat: the admin token concedes for a seat, 0 or 1, which it must name");
+      }
+      conceding = static_cast<int>(request.seat());
+    } else if (request.has_seat() && static_cast<int>(request.seat()) != seat) {
+      return absl::PermissionDeniedError("seat: a seat concedes only for itself");
+    }
+    if (t.sim != nullptr) {
+      return absl::FailedPreconditionError(
+          "balls are still moving: concede when they are at rest");
+    }
+    b::TableState balls = t.rest;
+    absl::StatusOr<games::Judgement> j =
+        t.game_referee->Concede(t.rules, *t.model, t.game, conceding, &balls);
+    if (!j.ok()) return j.status();
+    const games::Verdict verdict = j->verdict;
+    ApplyCallJudgement(host_, t, *std::move(j), std::move(balls),
+                       MatchEntry{.kind = MatchEntry::Kind::kConcede, .seat = conceding,
+                                  .verdict = verdict},
+                       &pump);
+    v1::ConcedeResponse response;
+    response.set_sequence(t.sequence);
+    *response.mutable_game() = *t.game_view;
+    return response;
+  });
+}
+
+absl::StatusOr<v1::MatchRecord> TableRegistry::GetMatchRecord(
+    const v1::GetMatchRecordRequest& request) {
+  absl::StatusOr<std::shared_ptr<Table>> found = host_.Find(request.table_id());
+  if (!found.ok()) return found.status();
+  Table& t = **found;
+  absl::MutexLock lock(&t.mu);
+  if (!Ruled(t)) {
+    return absl::FailedPreconditionError("table_id: a free-play table keeps no match record");
+  }
+  v1::MatchRecord out;
+  out.set_table_id(t.id);
+  // The seeds stay secret while the match goes on: they would let a seat predict its noise.
+  const bool ended = t.game.match_over();
+  out.set_ended(ended);
+  out.mutable_create()->ParseFromString(t.create_request);
+  if (ended) out.mutable_create()->mutable_game()->set_seed(t.seed);
+  for (const MatchEntry& m : t.record) {
+    v1::MatchAction* a = out.add_actions();
+    a->set_tick(m.tick);
+    a->set_seat(static_cast<uint32_t>(std::max(m.seat, 0)));
+    switch (m.kind) {
+      case MatchEntry::Kind::kShoot:
+        a->set_kind(v1::MatchAction::SHOOT);
+        a->mutable_strike()->ParseFromString(m.strike);
+        ShotCallToProto(m.call, a->mutable_call());
+        a->set_shot_id(m.shot_id);
+        if (ended) {
+          a->set_seed(m.seed);
+          StrikeReportToProto(m.applied, a->mutable_applied());
+        }
+        break;
+      case MatchEntry::Kind::kPlace:
+        a->set_kind(v1::MatchAction::PLACE);
+        a->mutable_place()->set_id(m.ball);
+        a->mutable_place()->set_x_m(m.x_m);
+        a->mutable_place()->set_y_m(m.y_m);
+        break;
+      case MatchEntry::Kind::kDecide:
+        a->set_kind(v1::MatchAction::DECIDE);
+        a->set_choice(m.choice);
+        break;
+      case MatchEntry::Kind::kConcede: a->set_kind(v1::MatchAction::CONCEDE); break;
+      case MatchEntry::Kind::kShotClock: a->set_kind(v1::MatchAction::SHOT_CLOCK); break;
+      case MatchEntry::Kind::kReset: a->set_kind(v1::MatchAction::RESET); break;
+    }
+    if (m.verdict.has_value()) VerdictToProto(*m.verdict, a->mutable_verdict());
+  }
+  *out.mutable_game() = *t.game_view;
+  return out;
+}
+
 absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
     const v1::WatchTableRequest& request, SnapshotSink* sink) {
-  absl::StatusOr<std::shared_ptr<Table>> found = Find(request.table_id());
-  if (!found.ok()) return found.status();
-  const std::shared_ptr<Table>& ptr = *found;
-  Table& t = *ptr;
   WatchOptions options;
   options.changed_only = request.changed_only();
-  double interval_ticks = 1.0;
-  if (request.rate_hz() != 0) {
-    if (absl::Status s = CheckFiniteInRange("rate_hz", request.rate_hz(), 0, true, 1000, false);
-        !s.ok()) {
-      return s;
-    }
-    // Above the table's tick rate is every tick.
-    interval_ticks = std::max(1.0, t.tick_hz / request.rate_hz());
-  }
   if (request.fields_size() > 0) {
     options.position = options.velocity = options.spin = options.orientation = false;
     for (int i = 0; i < request.fields_size(); ++i) {
@@ -709,175 +973,15 @@ absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(
       }
     }
   }
-  auto watcher = std::make_shared<Watcher>(t.id, options, interval_ticks,
-                                           limits_.watcher_backlog, counters_);
-  watcher->Attach(sink);
-  {
-    absl::MutexLock lock(&t.mu);
-    if (absl::Status gone = t.Gone(); !gone.ok()) return gone;
-    if (static_cast<int>(t.watchers.size()) >= limits_.max_watchers_per_table) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "table %s has its maximum of %d watchers (--max_watchers_per_table)", t.id,
-          limits_.max_watchers_per_table));
-    }
-    std::vector<EventPtr> replay;
-    if (request.has_from_sequence()) {
-      bool lost = false;
-      absl::StatusOr<std::vector<EventPtr>> after =
-          t.log.After(request.from_sequence(), t.sequence, "table", &lost);
-      if (!after.ok()) return after.status();
-      if (lost) watcher->MarkResync();
-      replay = *std::move(after);
-    }
-    const int64_t tick = t.NowTick();
-    watcher->Due(tick);  // the first snapshot is now
-    watcher->Offer(t.MakeFrame(tick, false), replay);
-    t.watchers.push_back(watcher);
-    if (t.sim == nullptr && t.watchers.size() == 1) {
-      Schedule(t, ptr, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
-    }
-  }
-  return watcher;
+  std::optional<uint64_t> from;
+  if (request.has_from_sequence()) from = request.from_sequence();
+  return host_.Watch(request.table_id(), request.rate_hz(), options, from, sink);
 }
 
 void TableRegistry::Unwatch(const std::string& table_id, const Watcher* watcher) {
-  std::shared_ptr<Table> table;
-  {
-    absl::MutexLock lock(&mu_);
-    auto it = tables_.find(table_id);
-    if (it == tables_.end()) return;
-    table = it->second;
-  }
-  absl::MutexLock lock(&table->mu);
-  auto& ws = table->watchers;
-  ws.erase(std::remove_if(ws.begin(), ws.end(),
-                          [watcher](const std::shared_ptr<Watcher>& w) { return w.get() == watcher; }),
-           ws.end());
+  host_.Unwatch(table_id, watcher);
 }
 
-void TableRegistry::Process(const std::shared_ptr<Table>& ptr, uint64_t generation,
-                            SteadyClock::time_point now) {
-  Table& t = *ptr;
-  std::vector<std::shared_ptr<Watcher>> pump;
-  {
-    absl::MutexLock lock(&t.mu);
-    if (t.deleted || t.closed || generation != t.wake_generation) return;  // superseded
-    if (t.sim == nullptr) {
-      // At rest: a heartbeat for the watchers, then sleep until the next one.
-      if (t.watchers.empty()) return;
-      const std::shared_ptr<const Frame> beat = t.MakeFrame(t.ClockTick(now), true);
-      for (const std::shared_ptr<Watcher>& w : t.watchers) {
-        if (w->OfferHeartbeat(beat)) pump.push_back(w);
-      }
-      Schedule(t, ptr, now + absl::ToChronoNanoseconds(limits_.heartbeat));
-    } else {
-      const int64_t due = t.clock.DueTick(now);
-      if (due <= t.tick) {
-        Schedule(t, ptr, t.Deadline(t.tick + 1));
-      } else {
-        int64_t slipped = 0;
-        int64_t target = t.clock.CatchUp(t.tick, due, limits_.max_catchup_ticks, &slipped);
-        if (slipped > 0) slipped_ticks_.fetch_add(slipped);
-        // Tick by tick, so that the tick a shot ends on (or is stopped on) does not depend on
-        // how many ticks one visit covers. For the event engine a tick without events is a
-        // few evaluations; the stepped engine does the same steps either way.
-        std::vector<b::Event> events;
-        std::string error;
-        bool voided = false;
-        bool ended = false;
-        int64_t k = t.tick;
-        while (k < target && !ended) {
-          ++k;
-          const absl::Status st = t.sim->AdvanceTo(t.ShotTime(k), &events);
-          if (!st.ok()) {
-            error = absl::StrFormat("%s; the balls were put back where the shot started",
-                                    st.message());
-            voided = ended = true;
-          } else if (t.sim->AtRest()) {
-            ended = true;
-          } else if (t.ShotTime(k) >= limits_.max_shot_s) {
-            error = absl::StrFormat("the shot was stopped after %g s of simulated time",
-                                    limits_.max_shot_s);
-            ended = true;
-          }
-        }
-        // Late: advanced more than a period after its deadline.
-        const int64_t late = std::min(k, due - 1) - t.tick;
-        if (late > 0) late_ticks_.fetch_add(late);
-        ticks_.fetch_add(k - t.tick);
-        t.tick = k;
-        target = k;
-        ++t.sequence;
-        std::vector<EventPtr> fresh;
-        t.LogShotEvents(events, limits_.event_log, &fresh);
-        if (ended) {
-          EndShot(t, target, error, voided, limits_.event_log, &fresh);
-          moving_.fetch_sub(1);
-        }
-        events_.fetch_add(static_cast<int64_t>(fresh.size()));
-        std::shared_ptr<const Frame> frame;
-        for (const std::shared_ptr<Watcher>& w : t.watchers) {
-          const bool due_now = w->Due(target) || ended;
-          if (due_now && frame == nullptr) frame = t.MakeFrame(target, false, true);
-          if (w->Offer(due_now ? frame : nullptr, fresh)) pump.push_back(w);
-        }
-        if (!ended) {
-          Schedule(t, ptr, t.Deadline(t.tick + 1));
-        } else if (!t.watchers.empty()) {
-          Schedule(t, ptr, now + absl::ToChronoNanoseconds(limits_.heartbeat));
-        }
-      }
-    }
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-}
-
-void TableRegistry::Shutdown(const absl::Status& status) {
-  // No new call gets a table from here on; calls that already hold one see it closed below.
-  std::vector<std::shared_ptr<Table>> tables;
-  {
-    absl::MutexLock lock(&mu_);
-    if (shut_down_) return;
-    shut_down_ = true;
-    for (auto& [id, t] : tables_) tables.push_back(t);
-  }
-  std::vector<std::shared_ptr<Watcher>> pump;
-  for (const std::shared_ptr<Table>& p : tables) {
-    absl::MutexLock lock(&p->mu);
-    p->closed = true;
-    const std::shared_ptr<const Frame> last =
-        p->MakeFrame(p->NowTick(), false);
-    for (const std::shared_ptr<Watcher>& w : p->watchers) {
-      if (w->Close(status, last)) pump.push_back(w);
-    }
-  }
-  for (const std::shared_ptr<Watcher>& w : pump) w->Pump();
-  // A wake in progress has finished (it saw the table closed, or ran before); pending ones go.
-  if (own_scheduler_ != nullptr) own_scheduler_->Stop();
-}
-
-TableStats TableRegistry::stats() const {
-  TableStats s;
-  s.ticks = ticks_.load();
-  s.late_ticks = late_ticks_.load();
-  s.slipped_ticks = slipped_ticks_.load();
-  s.events = events_.load();
-  s.tick_cpu_ns = scheduler_->cpu_ns();
-  s.moving = moving_.load();
-  std::vector<std::shared_ptr<Table>> tables;
-  {
-    absl::MutexLock lock(&mu_);
-    s.tables = static_cast<int>(tables_.size());
-    for (const auto& [id, t] : tables_) tables.push_back(t);
-  }
-  for (const std::shared_ptr<Table>& t : tables) {
-    absl::MutexLock lock(&t->mu);
-    s.watchers += static_cast<int>(t->watchers.size());
-  }
-  s.snapshots_sent = counters_->sent.load();
-  s.snapshots_replaced = counters_->replaced.load();
-  s.resyncs = counters_->resyncs.load();
-  return s;
-}
+void TableRegistry::Shutdown(const absl::Status& status) { host_.Shutdown(status); }
 
 }  // namespace sportsim::server

@@ -1,6 +1,7 @@
-// Authoritative billiards tables: the registry, the fixed-rate scheduler and the snapshot
-// fan-out to watchers. No gRPC here: a watcher writes through a SnapshotSink (the gRPC reactor in
-// services.cc, a fake in tests). docs/server.md describes the design.
+// Authoritative billiards tables: the table kind of world (what a table holds, how a tick
+// advances its shot, how a shot ends) and the table calls, over the shared WorldHost. No gRPC
+// here: a watcher writes through a SnapshotSink (the gRPC reactor in rpc/, a fake in tests).
+// docs/server.md describes the design, docs/architecture.md the tick's stages.
 //
 // Time. Tick k of a table is due at origin + k / tick_hz on the monotonic clock. A shot struck
 // at tick s is simulated in its own time from 0, and tick k advances it to (k - s) / tick_hz
@@ -8,12 +9,12 @@
 // load or on when the worker got to the table: the same strike gives the same bits as
 // SimulateShot. A table at rest is not scheduled; its tick is read off the clock when asked.
 //
-// Locks: Registry::mu_ -> Table::mu -> Watcher::mu_ -> TickScheduler::mu_ (never the other
-// way). Sinks are only called with no lock held.
-#ifndef SPORTSIM_SERVER_TABLES_H_
-#define SPORTSIM_SERVER_TABLES_H_
+// Locks: as world_host.h: the host's map -> Table::mu -> Watcher::mu_ -> TickScheduler::mu_.
+#ifndef SPORTSIM_SERVER_BILLIARDS_TABLE_WORLD_H_
+#define SPORTSIM_SERVER_BILLIARDS_TABLE_WORLD_H_
 
-#include <atomic>
+#include <optional>
+#include <string_view>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -28,39 +29,57 @@
 #include "absl/time/time.h"
 #include "server/world/scheduler.h"
 #include "server/world/watcher.h"
+#include "server/world/world_host.h"
+#include "sim/billiards/cue.h"
+#include "sim/billiards/engine.h"
+#include "sim/billiards/referee.h"
 #include "sim/billiards/model.h"
 #include "sim/billiards/state.h"
+#include "sim/games/game.h"
 #include "sportsim/v1/billiards.pb.h"
 
 namespace sportsim::server {
 
 struct TableLimits {
-  int max_tables = 2000;
-  int max_watchers_per_table = 64;
-  int event_log = 512;            ///< events a table holds for resuming watchers
-  int watcher_backlog = 1024;     ///< events a watcher may have unsent before it is resynced
-  int workers = 0;                ///< tick threads when the registry has its own scheduler;
-                                  ///< 0: one per core
-  int max_catchup_ticks = 12;     ///< a table further behind slips instead of racing
-  absl::Duration heartbeat = absl::Seconds(1);
-  double max_shot_s = 600.0;      ///< simulated time after which a shot is stopped
+  WorldLimits world;          ///< limits every kind of world has (max_worlds: --max_tables)
+  double max_shot_s = 600.0;  ///< simulated time after which a shot is stopped
 };
 
-/// Counters for the load generator, metrics and tests (monotonic totals).
-struct TableStats {
-  int64_t ticks = 0;           ///< table ticks advanced
-  int64_t late_ticks = 0;      ///< advanced more than one period after their deadline
-  int64_t slipped_ticks = 0;   ///< never advanced on time: the catch-up cap moved the table's
-                               ///< clock on instead (not counted in ticks or late_ticks)
-  int64_t snapshots_sent = 0;
-  int64_t snapshots_replaced = 0;  ///< latest wins: offered but overtaken before being sent
-  int64_t resyncs = 0;
-  int64_t events = 0;          ///< table events produced
-  int64_t tick_cpu_ns = 0;     ///< thread CPU time the scheduler's workers spent (on every
-                               ///< kind of world they tick)
-  int tables = 0;
-  int moving = 0;
-  int watchers = 0;
+/// A shot as the table keeps it: who struck what, what the referee's facts were, how it ended.
+struct ShotSummary {
+  uint64_t shot_id = 0;
+  uint32_t seat = 0;
+  std::string struck_ball;
+  std::string first_ball_hit;         ///< "" if none
+  uint32_t rails = 0;                 ///< every ball-cushion hit
+  uint32_t rails_after_contact = 0;   ///< ... after the struck ball's first contact
+  std::vector<std::string> pocketed;  ///< in order
+  bool struck_ball_pocketed = false;
+  int64_t start_tick = 0;
+  int64_t end_tick = 0;
+  double duration_s = 0.0;            ///< simulated
+  int64_t events = 0;                 ///< events the engine handled
+  std::string error;                  ///< set when the engine stopped the shot
+  games::ShotCall call;               ///< ruled games: what the shooter declared
+  std::optional<games::Verdict> verdict;  ///< ruled games: the referee's word
+};
+
+/// One entry of a ruled table's match record: what was asked, at which tick, and what the
+/// referee made of it.
+struct MatchEntry {
+  enum class Kind : uint8_t { kShoot, kPlace, kDecide, kConcede, kShotClock, kReset };
+  Kind kind = Kind::kShoot;
+  int64_t tick = 0;
+  int seat = 0;
+  std::string strike;          ///< kShoot: the CueStrike as asked (serialized)
+  games::ShotCall call;        ///< kShoot
+  uint64_t shot_id = 0;        ///< kShoot
+  uint64_t seed = 0;           ///< kShoot: the noise seed applied
+  billiards::StrikeOutcome applied;  ///< kShoot: the strike after noise
+  std::string ball;            ///< kPlace
+  double x_m = 0.0, y_m = 0.0; ///< kPlace
+  std::string choice;          ///< kDecide
+  std::optional<games::Verdict> verdict;  ///< kShoot (at its end), kShotClock, kConcede
 };
 
 /// The state of a table at one tick, shared by every watcher that sends it.
@@ -74,6 +93,7 @@ struct Frame {
   uint64_t shot_id = 0;
   std::shared_ptr<const billiards::TableModel> model;
   std::vector<billiards::Ball> balls;
+  std::shared_ptr<const v1::GameState> game;  ///< ruled games
   SteadyClock::time_point published;  ///< when the tick was due, or when a call made it
                                       ///< (the start of publish-to-write latency)
 };
@@ -98,11 +118,80 @@ using Watcher = BasicWatcher<TableWatch>;
 using SnapshotSink = StreamSink<v1::TableSnapshot>;
 using EventPtr = Watcher::EventPtr;
 
-struct Table;
+struct TableKind;
+using Table = World<TableKind>;
+using TableHost = WorldHost<TableKind>;
 
-/// Every table of the server. Ticks run on `scheduler` (shared with the other kinds of world;
-/// its owner stops it before destroying the registry), or on a scheduler of the registry's own
-/// with limits.workers threads.
+/// The billiards table kind of world (world_host.h).
+struct TableKind {
+  using Watch = TableWatch;
+  static constexpr std::string_view kNoun = "table";
+  static constexpr std::string_view kIdPrefix = "t-";
+  static constexpr std::string_view kIdField = "table_id";
+  static constexpr std::string_view kCreateRpc = "CreateTable";
+  static constexpr std::string_view kMaxWorldsFlag = "--max_tables";
+  static constexpr std::string_view kMaxWatchersFlag = "--max_watchers_per_table";
+
+  /// A table's own members (guarded by its mu unless fixed at creation).
+  struct Data {
+    // Fixed at creation.
+    std::string preset;
+    std::string rack;
+    std::shared_ptr<const billiards::TableModel> model;
+    billiards::TableState initial;
+    billiards::SolverOptions solver;
+    int64_t steps_per_tick = 0;  ///< stepped engine: dt_s * steps_per_tick = period
+    double max_shot_s = 600.0;
+    games::Rules rules;                           ///< game kFree: free play, no referee
+    const games::Referee* game_referee = nullptr;
+    games::Start start = games::Start::kBreak;
+    double noise = 0.0;                           ///< ruled games: on every strike
+    uint64_t seed = 0;                            ///< the noise's; secret until the match ends
+    std::string create_request;                   ///< CreateTableRequest as asked (serialized)
+    // Guarded by mu.
+    uint32_t turn = 0;
+    billiards::TableState rest;                            ///< the balls when no shot moves
+    std::unique_ptr<billiards::TableSimulation> sim;       ///< the shot in progress
+    std::unique_ptr<billiards::ShotReferee> referee;
+    billiards::TableState shot_start;                      ///< ids for the shot's events
+    ShotSummary current;                                   ///< the shot in progress
+    ShotSummary last_shot;
+    uint64_t shots = 0;
+    games::GameState game;                                 ///< ruled games
+    std::shared_ptr<const v1::GameState> game_view;        ///< its API view, made on change
+    bool placed = false;                      ///< the cue ball was placed since the last shot
+    std::vector<billiards::Event> shot_events;  ///< ruled games: the shot's, for the referee
+    std::optional<int64_t> clock_deadline;    ///< the shot clock runs out at this tick
+    std::vector<MatchEntry> record;           ///< ruled games: the match so far
+  };
+  /// One wake's engine events.
+  struct TickOut {
+    std::vector<billiards::Event> events;
+  };
+  /// How a shot ended: at rest (no error), stopped (error), or voided (the balls go back).
+  struct End {
+    std::string error;
+    bool voided = false;
+  };
+
+  static bool Running(const Table& t);
+  static std::optional<End> AdvanceTick(TableHost& host, Table& t, int64_t k, TickOut* out);
+  static OffLockWork OffLock(Table&, TickOut*) { return nullptr; }
+  static void Publish(TableHost& host, Table& t, TickOut* out,
+                      std::vector<std::shared_ptr<const v1::TableEvent>>* fresh);
+  static void EndRun(TableHost& host, Table& t, const End& end,
+                     std::vector<std::shared_ptr<const v1::TableEvent>>* fresh,
+                     Table::Pump* pump);
+  static std::shared_ptr<const Frame> MakeFrame(const Table& t, int64_t k, bool heartbeat,
+                                                SteadyClock::time_point published);
+  /// Ruled games at rest: the shot clock's tick, when it runs.
+  static std::optional<int64_t> RestDeadline(const Table& t);
+  /// The shot clock ran out: the game's penalty.
+  static void AtRestDeadline(TableHost& host, Table& t,
+                             std::vector<std::shared_ptr<const v1::TableEvent>>* fresh);
+};
+
+/// Every table of the server: the table-specific calls over a WorldHost<TableKind>.
 class TableRegistry {
  public:
   explicit TableRegistry(TableLimits limits, TickScheduler* scheduler = nullptr);
@@ -118,6 +207,9 @@ class TableRegistry {
   absl::StatusOr<v1::PlaceBallResponse> Place(const v1::PlaceBallRequest& request);
   absl::StatusOr<v1::ShootResponse> Shoot(const v1::ShootRequest& request);
   absl::StatusOr<v1::SetTurnResponse> SetTurn(const v1::SetTurnRequest& request);
+  absl::StatusOr<v1::DecideResponse> Decide(const v1::DecideRequest& request);
+  absl::StatusOr<v1::ConcedeResponse> Concede(const v1::ConcedeRequest& request);
+  absl::StatusOr<v1::MatchRecord> GetMatchRecord(const v1::GetMatchRecordRequest& request);
 
   /// Registers a watcher writing to `sink` and queues its first snapshot; the caller then calls
   /// Pump() on it. With a null sink, the caller Attach()es one before pumping (nothing is
@@ -131,33 +223,14 @@ class TableRegistry {
   /// scheduler, if it has one). Afterwards every call fails with UNAVAILABLE. Idempotent.
   void Shutdown(const absl::Status& status);
 
-  TableStats stats() const;
-  const LatencyHistogram& publish_to_write() const { return counters_->publish_to_write; }
+  WorldStats stats() const { return host_.stats(); }
+  const LatencyHistogram& publish_to_write() const { return host_.publish_to_write(); }
 
  private:
-  friend struct Table;
-  absl::StatusOr<std::shared_ptr<Table>> Find(const std::string& id);
-  template <typename Response, typename Fn>
-  absl::StatusOr<Response> Act(const std::string& table_id, const std::string& token,
-                               bool to_play, Fn fn);
-  /// Wakes a worker for `t` at `when`, superseding its previous wake. Call with t.mu held.
-  void Schedule(Table& t, const std::shared_ptr<Table>& ptr, SteadyClock::time_point when);
-  void Process(const std::shared_ptr<Table>& table, uint64_t generation,
-               SteadyClock::time_point now);
-
   const TableLimits limits_;
-  const std::shared_ptr<WatchCounters> counters_;
-  mutable absl::Mutex mu_;
-  std::map<std::string, std::shared_ptr<Table>, std::less<>> tables_ ABSL_GUARDED_BY(mu_);
-  bool shut_down_ ABSL_GUARDED_BY(mu_) = false;
-
-  std::unique_ptr<TickScheduler> own_scheduler_;
-  TickScheduler* scheduler_;
-
-  std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0};
-  std::atomic<int> moving_{0};
+  TableHost host_;
 };
 
 }  // namespace sportsim::server
 
-#endif  // SPORTSIM_SERVER_TABLES_H_
+#endif  // SPORTSIM_SERVER_BILLIARDS_TABLE_WORLD_H_

@@ -4,6 +4,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/billiards/convert.h"
+#include "server/billiards/game_convert.h"
 #include "server/rpc/status.h"
 #include "server/swing/session_world.h"
 #include "server/billiards/table_world.h"
@@ -262,8 +263,8 @@ class SwingService final : public v1::Swing::CallbackService {
     absl::StatusOr<FlightJob> job = FlightJobFromProto(request);
     if (!job.ok()) return job.status();
     const double cpu0 = ThreadCpuSeconds();
-    absl::StatusOr<swing::FlightResult> result =
-        swing::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+    absl::StatusOr<golf::FlightResult> result =
+        golf::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
     const double cpu_s = ThreadCpuSeconds() - cpu0;
     if (!result.ok()) return result.status();
     FlightResultToProto(*result, cpu_s, response);
@@ -321,6 +322,21 @@ class BilliardsService final : public v1::Billiards::CallbackService {
                                     v1::SetTurnResponse* response) override {
     return Unary(ctx, response, [&] { return tables_->SetTurn(*request); });
   }
+  grpc::ServerUnaryReactor* Decide(grpc::CallbackServerContext* ctx,
+                                   const v1::DecideRequest* request,
+                                   v1::DecideResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->Decide(*request); });
+  }
+  grpc::ServerUnaryReactor* Concede(grpc::CallbackServerContext* ctx,
+                                    const v1::ConcedeRequest* request,
+                                    v1::ConcedeResponse* response) override {
+    return Unary(ctx, response, [&] { return tables_->Concede(*request); });
+  }
+  grpc::ServerUnaryReactor* GetMatchRecord(grpc::CallbackServerContext* ctx,
+                                           const v1::GetMatchRecordRequest* request,
+                                           v1::MatchRecord* response) override {
+    return Unary(ctx, response, [&] { return tables_->GetMatchRecord(*request); });
+  }
   grpc::ServerWriteReactor<v1::TableSnapshot>* WatchTable(
       grpc::CallbackServerContext*, const v1::WatchTableRequest* request) override {
     return new WatchReactor<TableRegistry, Watcher, v1::WatchTableRequest>(tables_, *request,
@@ -366,6 +382,7 @@ v1::GetInfoResponse MakeServerInfo() {
   }
   for (const std::string& e : SwingEffectNames()) caps->add_swing_effects(e);
   for (v1::ParameterInfo& p : SwingParameterInfo()) *caps->add_swing_parameters() = std::move(p);
+  GamesToProto(caps->mutable_games());
   caps->add_services(v1::Server::service_full_name());
   caps->add_services(v1::Swing::service_full_name());
   caps->add_services(v1::Billiards::service_full_name());

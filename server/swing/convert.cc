@@ -72,9 +72,9 @@ absl::StatusOr<swing::SwingModel> SwingModelFromProto(
   uint32_t disabled = 0;
   for (int i = 0; i < disabled_effects.size(); ++i) {
     switch (disabled_effects.Get(i)) {
-      case v1::SWING_EFFECT_GRAVITY: disabled |= swing::kSwingGravity; break;
-      case v1::SWING_EFFECT_SHOULDER_ACCEL: disabled |= swing::kSwingShoulderAccel; break;
-      case v1::SWING_EFFECT_WRIST_TORQUE: disabled |= swing::kSwingWristTorque; break;
+      case v1::SWING_EFFECT_GRAVITY: disabled |= swing::kSwingDisableGravity; break;
+      case v1::SWING_EFFECT_SHOULDER_ACCEL: disabled |= swing::kSwingDisableShoulderAccel; break;
+      case v1::SWING_EFFECT_WRIST_TORQUE: disabled |= swing::kSwingDisableWristTorque; break;
       default:
         return absl::InvalidArgumentError(absl::StrFormat(
             "disabled_effects[%d]: unknown effect %d", i, disabled_effects.Get(i)));
@@ -120,9 +120,9 @@ absl::StatusOr<swing::SwingSolverOptions> SwingSolverFromProto(const v1::SwingSo
       return absl::InvalidArgumentError(absl::StrFormat("solver.integrator: unknown value %d",
                                                         static_cast<int>(s.integrator())));
   }
-  if (s.has_dt_s()) o.dt_s = s.dt_s();
-  if (s.has_tolerance()) o.tolerance = s.tolerance();
-  if (s.has_max_step_s()) o.max_step_s = s.max_step_s();
+  if (s.has_dt_s()) o.accuracy.dt_s = s.dt_s();
+  if (s.has_tolerance()) o.accuracy.tolerance = s.tolerance();
+  if (s.has_max_step_s()) o.accuracy.max_step_s = s.max_step_s();
   if (absl::Status st = swing::ValidateSolverOptions(o); !st.ok()) return PrefixStatus("solver.", st);
   return o;
 }
@@ -160,7 +160,7 @@ absl::StatusOr<SwingJob> SwingJobFromProto(const v1::SimulateSwingRequest& r) {
   } else if (solver->integrator == SwingIntegrator::kDp45) {
     run.sample_interval_s = run.duration_s / kAutoSamples;
   } else {
-    const double steps = run.duration_s / solver->dt_s.value_or(swing::SwingSolverOptions::kDefaultDt);
+    const double steps = run.duration_s / solver->dt();
     run.sample_stride = std::max(1, static_cast<int>(std::ceil(steps / kAutoSamples)));
   }
   if (absl::Status s = swing::ValidateRunOptions(*solver, run); !s.ok()) return s;
@@ -226,7 +226,7 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
                 .launch_direction_deg = l.launch_direction_deg(),
                 .spin_rpm = l.spin_rpm(),
                 .spin_axis_deg = l.spin_axis_deg()};
-  if (absl::Status s = swing::ValidateLaunchConditions(job.launch); !s.ok()) {
+  if (absl::Status s = golf::ValidateLaunchConditions(job.launch); !s.ok()) {
     return PrefixStatus("launch.", s);
   }
   const v1::Atmosphere& a = r.atmosphere();
@@ -234,24 +234,24 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
   if (a.has_sea_level_pressure_pa()) job.atmosphere.pressure_pa = a.sea_level_pressure_pa();
   if (a.has_relative_humidity()) job.atmosphere.relative_humidity = a.relative_humidity();
   if (a.has_altitude_m()) job.atmosphere.altitude_m = a.altitude_m();
-  if (absl::StatusOr<swing::AirProperties> air = swing::ComputeAirProperties(job.atmosphere);
+  if (absl::StatusOr<golf::AirProperties> air = golf::ComputeAirProperties(job.atmosphere);
       !air.ok()) {
     return PrefixStatus("atmosphere.", air.status());
   }
   job.wind.speed_mps = r.wind().speed_mps();
   job.wind.toward_deg = r.wind().toward_deg();
-  job.wind.profile = r.wind().logarithmic_profile() ? swing::WindProfile::kLogarithmic
-                                                    : swing::WindProfile::kUniform;
+  job.wind.profile = r.wind().logarithmic_profile() ? golf::WindProfile::kLogarithmic
+                                                    : golf::WindProfile::kUniform;
   // (The library names the field: "wind speed_mps must be ...".)
-  if (absl::Status s = swing::ValidateWind(job.wind); !s.ok()) return s;
+  if (absl::Status s = golf::ValidateWind(job.wind); !s.ok()) return s;
   for (int i = 0; i < r.disabled_effects_size(); ++i) {
     switch (r.disabled_effects(i)) {
-      case v1::FLIGHT_EFFECT_DRAG: job.options.disabled |= swing::kFlightDisableDrag; break;
-      case v1::FLIGHT_EFFECT_LIFT: job.options.disabled |= swing::kFlightDisableLift; break;
+      case v1::FLIGHT_EFFECT_DRAG: job.options.effects |= golf::kFlightDisableDrag; break;
+      case v1::FLIGHT_EFFECT_LIFT: job.options.effects |= golf::kFlightDisableLift; break;
       case v1::FLIGHT_EFFECT_SPIN_DECAY:
-        job.options.disabled |= swing::kFlightDisableSpinDecay;
+        job.options.effects |= golf::kFlightDisableSpinDecay;
         break;
-      case v1::FLIGHT_EFFECT_WIND: job.options.disabled |= swing::kFlightDisableWind; break;
+      case v1::FLIGHT_EFFECT_WIND: job.options.effects |= golf::kFlightDisableWind; break;
       default:
         return absl::InvalidArgumentError(absl::StrFormat(
             "disabled_effects[%d]: unknown effect %d", i, static_cast<int>(r.disabled_effects(i))));
@@ -260,9 +260,9 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
   switch (r.aero_fit()) {
     case v1::AERO_FIT_UNSPECIFIED:
     case v1::AERO_FIT_FERGUSON_2022:
-      job.options.aero.fit = swing::AeroFit::kFergusonMcNallyMcPhee2022;
+      job.options.aero.fit = golf::AeroFit::kFergusonMcNallyMcPhee2022;
       break;
-    case v1::AERO_FIT_NATHAN: job.options.aero.fit = swing::AeroFit::kNathan; break;
+    case v1::AERO_FIT_NATHAN: job.options.aero.fit = golf::AeroFit::kNathan; break;
     default:
       return absl::InvalidArgumentError(
           absl::StrFormat("aero_fit: unknown fit %d", static_cast<int>(r.aero_fit())));
@@ -274,7 +274,7 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
       return absl::InvalidArgumentError(
           absl::StrFormat("dt_s must be finite and in [1e-05, 0.1] s, got %g", r.dt_s()));
     }
-    job.options.dt_s = r.dt_s();
+    job.options.accuracy.dt_s = r.dt_s();
   }
   if (r.has_sample_interval_s()) {
     if (!(std::isfinite(r.sample_interval_s()) && r.sample_interval_s() >= 1e-3 &&
@@ -290,19 +290,19 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
 absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
   StrikeJob job;
   const std::string club = b.club().empty() ? "driver" : b.club();
-  absl::StatusOr<swing::ClubSpec> spec = swing::ClubPreset(club);
+  absl::StatusOr<golf::ClubSpec> spec = golf::ClubPreset(club);
   if (!spec.ok()) return PrefixStatus("ball.club: ", spec.status());
   job.club = *spec;
   if (b.has_cor()) job.club.cor = b.cor();
-  if (absl::Status s = swing::ValidateClubSpec(job.club); !s.ok()) return PrefixStatus("ball.", s);
+  if (absl::Status s = golf::ValidateClubSpec(job.club); !s.ok()) return PrefixStatus("ball.", s);
   if (b.has_dynamic_loft_deg()) job.delivery.dynamic_loft_deg = b.dynamic_loft_deg();
   job.delivery.face_angle_deg = b.face_angle_deg();
   job.delivery.club_path_deg = b.club_path_deg();
   // The delivery's own limits, checked now with a placeholder speed and a level attack, so a
   // bad face or loft is refused before any swing runs.
-  swing::ClubDelivery probe = job.delivery;
+  golf::ClubDelivery probe = job.delivery;
   probe.clubhead_speed_mps = 40.0;
-  if (absl::StatusOr<swing::ImpactResult> i = swing::SimulateImpact(probe, job.club, {});
+  if (absl::StatusOr<golf::ImpactResult> i = golf::SimulateImpact(probe, job.club, {});
       !i.ok()) {
     return PrefixStatus("ball.", i.status());
   }
@@ -329,7 +329,7 @@ absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
 }
 
 void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::BallLaunch* out) {
-  swing::ClubDelivery delivery = job.delivery;
+  golf::ClubDelivery delivery = job.delivery;
   delivery.clubhead_speed_mps = impact.clubhead_speed_ground_mps;
   // The ground-frame velocity's angle above the horizontal, toward the target (-x).
   delivery.attack_angle_deg =
@@ -337,7 +337,7 @@ void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::Ball
   out->set_club(job.club.name);
   out->set_clubhead_speed_mps(delivery.clubhead_speed_mps);
   out->set_attack_angle_deg(delivery.attack_angle_deg);
-  absl::StatusOr<swing::ImpactResult> hit = swing::SimulateImpact(delivery, job.club, {});
+  absl::StatusOr<golf::ImpactResult> hit = golf::SimulateImpact(delivery, job.club, {});
   if (!hit.ok()) {
     out->set_error(absl::StrCat("impact: ", hit.status().message()));
     return;
@@ -355,7 +355,7 @@ void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::Ball
   FlightJob flight = job.flight;
   flight.launch = hit->launch;  // SimulateFlight validates it
   const double cpu0 = ThreadCpuSeconds();
-  absl::StatusOr<swing::FlightResult> result = swing::SimulateFlight(
+  absl::StatusOr<golf::FlightResult> result = golf::SimulateFlight(
       flight.ball, flight.launch, flight.atmosphere, flight.wind, flight.options);
   const double cpu_s = ThreadCpuSeconds() - cpu0;
   if (!result.ok()) {
@@ -365,7 +365,7 @@ void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::Ball
   FlightResultToProto(*result, cpu_s, out->mutable_flight());
 }
 
-void FlightResultToProto(const swing::FlightResult& f, double cpu_s,
+void FlightResultToProto(const golf::FlightResult& f, double cpu_s,
                          v1::SimulateFlightResponse* out) {
   out->set_carry_m(f.carry_m);
   out->set_apex_m(f.apex_m);
@@ -373,7 +373,7 @@ void FlightResultToProto(const swing::FlightResult& f, double cpu_s,
   out->set_landing_angle_deg(f.landing_angle_deg);
   out->set_lateral_m(f.lateral_m);
   out->mutable_samples()->Reserve(static_cast<int>(f.samples.size()));
-  for (const swing::FlightSample& s : f.samples) {
+  for (const golf::FlightSample& s : f.samples) {
     v1::FlightSample* o = out->add_samples();
     o->set_t_s(s.t_s);
     o->set_x_m(s.x_m);

@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
-#include "sim/swing/ball_flight.h"
-#include "sim/swing/club_ball_impact.h"
-#include "sim/swing/golf_ball.h"
+#include "sim/golf/ball_flight.h"
+#include "sim/golf/club_ball_impact.h"
+#include "sim/golf/golf_ball.h"
 #include "sim/swing/swing_model.h"
 #include "sim/swing/swing_simulation.h"
 #include "sim/swing/swing_stepper.h"
@@ -22,17 +22,17 @@ namespace sportsim::server {
 /// Everything a SimulateFlightRequest asks for, validated (field names in errors are the
 /// proto's: "launch.spin_rpm", "atmosphere.altitude_m", "dt_s").
 struct FlightJob {
-  swing::BallSpec ball;
-  swing::LaunchConditions launch;
-  swing::Atmosphere atmosphere;
-  swing::Wind wind;
-  swing::FlightOptions options;
+  golf::BallSpec ball;
+  golf::LaunchConditions launch;
+  golf::Atmosphere atmosphere;
+  golf::Wind wind;
+  golf::FlightOptions options;
 };
 /// A validated BallStrike: the club and face, and the flight settings, checked once; each
 /// impact fills in the delivery's speed and attack angle and the flight's launch.
 struct StrikeJob {
-  swing::ClubSpec club;
-  swing::ClubDelivery delivery;
+  golf::ClubSpec club;
+  golf::ClubDelivery delivery;
   FlightJob flight;
 };
 
@@ -67,7 +67,7 @@ void SwingResultToProto(const swing::SwingRunResult& result, double cpu_s,
                         v1::SimulateSwingResponse* out);
 
 absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& request);
-void FlightResultToProto(const swing::FlightResult& result, double cpu_s,
+void FlightResultToProto(const golf::FlightResult& result, double cpu_s,
                          v1::SimulateFlightResponse* out);
 
 /// The swing parameters with units, defaults and ranges, for GetInfo.

@@ -1,22 +1,21 @@
-// Live golf-swing sessions: a golfer and club that swing on the server's clock, ticking on the
-// same scheduler as the billiards tables and fanning out through the same watchers. No gRPC
-// here: streams write through a StreamSink (services.cc, or a fake in tests).
-// docs/swing-sessions.md describes the design.
+// Live golf-swing sessions: the session kind of world (a golfer and club that swing on the
+// server's clock through a sim LiveSwing) and the session calls, over the shared WorldHost that
+// ticks the billiards tables too. No gRPC here: streams write through a StreamSink (rpc/, or a
+// fake in tests). docs/swing-sessions.md describes the design, docs/architecture.md the tick.
 //
 // Time. Tick k of a session is due at origin + k / tick_hz. A swing started at tick s is
-// integrated in its own time from 0, and tick k advances it to (k - s) / tick_hz. A scheduled
-// swing (StartSwing) steps exactly as SimulateSwing does (the same Step calls, the same impact
-// search), so its states and impact are bit-identical to SimulateSwing's whatever the load; a
-// tick reports the state at its time, interpolated when a step overshoots it. A driven swing
-// (DriveSwing) never steps past the last tick (a command may still come for the next one); with
-// a fixed step that divides the tick period it too is bit-identical to SimulateSwing with the
-// same torques as a schedule.
+// integrated in its own time from 0, and tick k advances it to swing tick k - s, at
+// (k - s) / tick_hz (sim/swing/live_swing.h has what that guarantees: bit-identity with
+// SimulateSwing).
 //
-// Locks: Registry::mu_ -> Session::mu -> Watcher::mu_ -> TickScheduler::mu_.
-#ifndef SPORTSIM_SERVER_SESSIONS_H_
-#define SPORTSIM_SERVER_SESSIONS_H_
+// Locks: as world_host.h: the host's map -> Session::mu -> Watcher::mu_ -> TickScheduler::mu_.
+#ifndef SPORTSIM_SERVER_SWING_SESSION_WORLD_H_
+#define SPORTSIM_SERVER_SWING_SESSION_WORLD_H_
 
+#include <algorithm>
 #include <array>
+#include <optional>
+#include <string_view>
 #include <atomic>
 #include <cstdint>
 #include <map>
@@ -30,37 +29,39 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/world/scheduler.h"
+#include "server/swing/convert.h"
 #include "server/world/watcher.h"
+#include "server/world/world_host.h"
+#include "sim/swing/live_swing.h"
 #include "sim/swing/swing_simulation.h"
 #include "sportsim/v1/swing.pb.h"
 
 namespace sportsim::server {
 
 struct SessionLimits {
-  int max_sessions = 2000;
-  int max_watchers_per_session = 64;
-  int event_log = 256;            ///< events a session holds for resuming watchers
-  int watcher_backlog = 1024;     ///< events a watcher may have unsent before it is resynced
-  int max_catchup_ticks = 12;     ///< a session further behind slips instead of racing
-  int max_pending_commands = 1024;  ///< a driver's queued (future) torque commands
-  absl::Duration heartbeat = absl::Seconds(1);
+  WorldLimits world{.event_log = 256};  ///< max_worlds: --max_sessions
+  int max_pending_commands = 1024;      ///< a driver's queued (future) torque commands
 };
 
-struct SessionStats {
-  int64_t ticks = 0;
-  int64_t late_ticks = 0;
-  int64_t slipped_ticks = 0;
-  int64_t snapshots_sent = 0;
-  int64_t snapshots_replaced = 0;
-  int64_t resyncs = 0;
-  int64_t events = 0;
+/// Counters of the driven swings' commands, shared by a registry's sessions.
+struct CommandCounters {
+  std::atomic<int64_t> applied{0};
+  std::atomic<int64_t> refused{0};
+  std::array<std::atomic<int64_t>, 17> refused_by_code{};  ///< by google.rpc code
+  void Refused(absl::StatusCode code) {
+    refused.fetch_add(1);
+    refused_by_code[static_cast<size_t>(std::clamp(static_cast<int>(code), 0, 16))].fetch_add(1);
+  }
+};
+
+struct SessionStats : WorldStats {
   int64_t commands = 0;          ///< torque commands applied
   int64_t commands_refused = 0;  ///< late, non-finite, out of range or out of order
   std::array<int64_t, 17> refused_by_code{};  ///< the same, by google.rpc code
-  int sessions = 0;
-  int swinging = 0;
-  int watchers = 0;
 };
+
+/// What a session is doing (the API's SwingPhase).
+enum class SessionPhase : uint8_t { kAddress, kSwinging, kFinished };
 
 /// A session's state at one tick, shared by every watcher that sends it.
 struct SwingFrame {
@@ -68,7 +69,7 @@ struct SwingFrame {
   int64_t tick = 0;
   bool heartbeat = false;
   SteadyClock::time_point published;
-  v1::SwingPhase phase = v1::SWING_PHASE_ADDRESS;
+  SessionPhase phase = SessionPhase::kAddress;
   uint64_t swing_id = 0;
   swing::SwingSample state;
   double qalpha_nm = 0, qbeta_nm = 0;
@@ -90,7 +91,64 @@ struct SwingWatch {
 using SwingWatcher = BasicWatcher<SwingWatch>;
 using SwingSink = StreamSink<v1::SwingSnapshot>;
 
-struct Session;
+struct SessionKind;
+using Session = World<SessionKind>;
+using SessionHost = WorldHost<SessionKind>;
+
+/// The swing-session kind of world (world_host.h).
+struct SessionKind {
+  using Watch = SwingWatch;
+  static constexpr std::string_view kNoun = "session";
+  static constexpr std::string_view kIdPrefix = "s-";
+  static constexpr std::string_view kIdField = "session_id";
+  static constexpr std::string_view kCreateRpc = "CreateSession";
+  static constexpr std::string_view kMaxWorldsFlag = "--max_sessions";
+  static constexpr std::string_view kMaxWatchersFlag = "--max_watchers_per_session";
+
+  /// A session's own members (guarded by its mu unless fixed at creation).
+  struct Data {
+    // Fixed at creation.
+    google::protobuf::RepeatedField<int> disabled_effects;
+    swing::SwingSolverOptions solver;
+    bool realistic = true;
+    std::optional<StrikeJob> strike;  ///< CreateSession's `ball`: launched at each impact
+    CommandCounters* counters = nullptr;
+    // Guarded by mu.
+    v1::SwingParameters params;  ///< as asked (echoed by GetSession; Reset may change it)
+    std::shared_ptr<const swing::SwingModel> model;  ///< at the address position
+    SessionPhase phase = SessionPhase::kAddress;
+    uint64_t swings = 0;  ///< also the id of the current or last swing
+    std::unique_ptr<swing::LiveSwing> live;  ///< the swing in progress
+    int64_t start_tick = 0;                  ///< the session tick at the swing's time 0
+    uint32_t seat = 0;                       ///< who started it
+    std::shared_ptr<SwingWatcher> driver;    ///< driven: the driver's stream, while it lasts
+    swing::SwingSample state;                ///< at the last tick advanced
+    double qalpha = 0, qbeta = 0;            ///< in force at `state`
+    std::optional<swing::SwingSample> last_impact;
+    std::string last_end_reason;
+  };
+  /// One wake's swing events, and the ball launched at an impact (computed off the lock).
+  struct TickOut {
+    std::vector<swing::LiveSwingEvent> events;
+    std::vector<v1::BallLaunch> launches;  ///< one per kImpact event, when the session has a ball
+  };
+  using End = swing::LiveSwingEnd;
+
+  static bool Running(const Session& s);
+  static std::optional<End> AdvanceTick(SessionHost& host, Session& s, int64_t k, TickOut* out);
+  static OffLockWork OffLock(Session& s, TickOut* out);
+  static void Publish(SessionHost& host, Session& s, TickOut* out,
+                      std::vector<std::shared_ptr<const v1::SwingEvent>>* fresh);
+  static void EndRun(SessionHost& host, Session& s, const End& end,
+                     std::vector<std::shared_ptr<const v1::SwingEvent>>* fresh,
+                     Session::Pump* pump);
+  static std::shared_ptr<const SwingFrame> MakeFrame(const Session& s, int64_t k, bool heartbeat,
+                                                     SteadyClock::time_point published);
+  /// Nothing falls due while a session is at rest.
+  static std::optional<int64_t> RestDeadline(const Session&) { return std::nullopt; }
+  static void AtRestDeadline(SessionHost&, Session&,
+                             std::vector<std::shared_ptr<const v1::SwingEvent>>*) {}
+};
 
 /// One DriveSwing stream's hold on its session.
 struct Drive {
@@ -104,6 +162,7 @@ struct Drive {
   bool ended = false;
 };
 
+/// Every swing session of the server: the session calls over a WorldHost<SessionKind>.
 class SessionRegistry {
  public:
   /// Ticks run on `scheduler` (its owner stops it before destroying the registry), or on a
@@ -145,31 +204,14 @@ class SessionRegistry {
   void Shutdown(const absl::Status& status);
 
   SessionStats stats() const;
-  const LatencyHistogram& publish_to_write() const { return counters_->publish_to_write; }
+  const LatencyHistogram& publish_to_write() const { return host_.publish_to_write(); }
 
  private:
-  friend struct Session;
-  absl::StatusOr<std::shared_ptr<Session>> Find(const std::string& id);
-  void Schedule(Session& s, SteadyClock::time_point when);
-  void EndSwing(Session& s, const std::string& reason,
-                std::vector<std::shared_ptr<const v1::SwingEvent>>* fresh,
-                std::shared_ptr<SwingWatcher>* driver);
-  void Process(const std::shared_ptr<Session>& session, uint64_t generation,
-               SteadyClock::time_point now);
-
   const SessionLimits limits_;
-  const std::shared_ptr<WatchCounters> counters_;
-  mutable absl::Mutex mu_;
-  std::map<std::string, std::shared_ptr<Session>, std::less<>> sessions_ ABSL_GUARDED_BY(mu_);
-  bool shut_down_ ABSL_GUARDED_BY(mu_) = false;
-  std::unique_ptr<TickScheduler> own_scheduler_;
-  TickScheduler* scheduler_;
-  std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0}, commands_{0},
-      refused_{0};
-  std::atomic<int> swinging_{0};
-  std::array<std::atomic<int64_t>, 17> refused_by_code_{};
+  CommandCounters counters_;
+  SessionHost host_;
 };
 
 }  // namespace sportsim::server
 
-#endif  // SPORTSIM_SERVER_SESSIONS_H_
+#endif  // SPORTSIM_SERVER_SWING_SESSION_WORLD_H_

@@ -97,16 +97,19 @@ void SeatsToProto(const std::vector<SeatEntry>& seats, bool with_tokens,
   }
 }
 
+bool TokensEqual(const std::string& secret, const std::string& given) {
+  unsigned diff = secret.size() != given.size() ? 1u : 0u;
+  for (size_t j = 0; j < secret.size(); ++j) {
+    diff |= static_cast<unsigned char>(secret[j]) ^
+            static_cast<unsigned char>(j < given.size() ? given[j] : 0);
+  }
+  return diff == 0;
+}
+
 int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token) {
   int seat = -1;
   for (size_t i = 0; i < seats.size(); ++i) {
-    const std::string& t = seats[i].token;
-    unsigned diff = t.size() != token.size() ? 1u : 0u;
-    for (size_t j = 0; j < t.size(); ++j) {
-      diff |= static_cast<unsigned char>(t[j]) ^
-              static_cast<unsigned char>(j < token.size() ? token[j] : 0);
-    }
-    if (diff == 0) seat = static_cast<int>(i);
+    if (TokensEqual(seats[i].token, token)) seat = static_cast<int>(i);
   }
   return seat;
 }

@@ -52,6 +52,9 @@ absl::StatusOr<std::vector<SeatEntry>> MakeSeats(
 void SeatsToProto(const std::vector<SeatEntry>& seats, bool with_tokens,
                   google::protobuf::RepeatedPtrField<v1::Seat>* out);
 
+/// `given` equals `secret`, compared in time that depends only on the secret's length.
+bool TokensEqual(const std::string& secret, const std::string& given);
+
 /// The seat whose token this is, or -1. Compares every seat in full (no early exit).
 int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token);
 

@@ -21,6 +21,9 @@
 //                      Pump* pump);
 //   static std::shared_ptr<const Frame> MakeFrame(const World<Kind>&, int64_t k, bool heartbeat,
 //                                                 SteadyClock::time_point published);
+//   static std::optional<int64_t> RestDeadline(const World<Kind>&);  // at rest: a tick at
+//                                     // which something is due (a shot clock), if any
+//   static void AtRestDeadline(Host&, World<Kind>&, std::vector<EventPtr>* fresh);  // it is due
 //
 // Locks: WorldHost::mu_ -> World::mu -> Watcher::mu_ -> TickScheduler::mu_ (never the other
 // way). Sinks are pumped only with no lock held.
@@ -49,6 +52,7 @@
 #include "server/world/scheduler.h"
 #include "server/world/watcher.h"
 #include "server/world/world.h"
+#include "sim/core/check.h"
 
 namespace sportsim::server {
 
@@ -62,6 +66,9 @@ struct WorldLimits {
                                  ///< per core
   int max_catchup_ticks = 12;    ///< a world further behind slips instead of racing
   absl::Duration heartbeat = absl::Seconds(1);  ///< at rest, a snapshot this often
+  /// Table time per wall-clock time: 1 is real time; more runs every world of the host faster
+  /// (tests, bots). Outcomes depend on ticks only, never on this.
+  double clock_rate = 1.0;
 };
 
 /// Counters of one kind of world (monotonic totals, and the current counts).
@@ -82,6 +89,9 @@ struct WorldStats {
 
 template <typename Kind>
 class WorldHost;
+
+/// Authorize()'s answer for the admin token.
+inline constexpr int kAdminSeat = -1;
 
 /// Work a tick does without the world's lock (a ball flight), before it publishes.
 using OffLockWork = std::function<void()>;
@@ -106,6 +116,7 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   double tick_hz = 1.0;
   double period_s = 1.0;
   std::vector<SeatEntry> seats;
+  std::string admin_token;  ///< the game backend's ("" : none)
 
   absl::Mutex mu;
   TickClock clock ABSL_GUARDED_BY(mu);
@@ -126,11 +137,14 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
     }
     return absl::OkStatus();
   }
-  /// The seat of `token` (or a Gone() status). Compares every seat in full.
+  /// The seat of `token`, kAdminSeat for the admin token (or a Gone() status). Compares every
+  /// token in full, in constant time.
   absl::StatusOr<int> Authorize(const std::string& token) const
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     if (absl::Status gone = Gone(); !gone.ok()) return gone;
+    const bool admin = !admin_token.empty() && TokensEqual(admin_token, token);
     const int seat = SeatOf(seats, token);
+    if (admin) return kAdminSeat;
     if (seat < 0) {
       return absl::PermissionDeniedError(absl::StrFormat("token: not a seat of this %s", Kind::kNoun));
     }
@@ -172,7 +186,7 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
 
 /// A page of worlds (ListTables, ListSessions).
 struct PageRequest {
-  int32_t page_size = 0;   ///< 0: 100; at most 1000
+  uint32_t page_size = 0;  ///< 0: 100; at most 1000
   std::string page_token;  ///< the last id of the previous page
 };
 
@@ -260,7 +274,7 @@ class WorldHost {
   template <typename Fn>
   absl::StatusOr<uint32_t> List(const PageRequest& request, std::string* next_page_token,
                                 Fn brief) {
-    if (request.page_size < 0 || request.page_size > 1000) {
+    if (request.page_size > 1000) {
       return absl::InvalidArgumentError(
           absl::StrFormat("page_size must be in [0, 1000], got %d", request.page_size));
     }
@@ -336,7 +350,7 @@ class WorldHost {
   static absl::StatusOr<double> IntervalTicks(std::string_view field, double rate_hz,
                                               double tick_hz) {
     if (rate_hz == 0) return 1.0;
-    if (absl::Status s = CheckFiniteInRange(field, rate_hz, 0, true, 1000, false); !s.ok()) {
+    if (absl::Status s = sportsim::CheckFiniteInRange(field, rate_hz, 0, true, 1000, false); !s.ok()) {
       return s;
     }
     return std::max(1.0, tick_hz / rate_hz);
@@ -389,7 +403,7 @@ class WorldHost {
     watcher->Due(tick);  // the first snapshot is now
     watcher->Offer(w.MakeFrame(tick, false), replay);
     w.watchers.push_back(watcher);
-    if (!Kind::Running(w) && w.watchers.size() == 1) ScheduleHeartbeat(w);
+    if (!Kind::Running(w) && w.watchers.size() == 1) ScheduleRest(w);
     return watcher;
   }
 
@@ -413,18 +427,25 @@ class WorldHost {
   void ScheduleNextTick(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     Schedule(w, w.clock.Deadline(w.tick + 1));
   }
-  void ScheduleHeartbeat(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
-    Schedule(w, SteadyClock::now() + absl::ToChronoNanoseconds(limits_.heartbeat));
-  }
-  /// A run ended by a call (reset, delete): its pending tick wake is void, and the readers
-  /// (if any) get heartbeats again.
-  void AfterRunEndedByCall(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
-    if (!w.watchers.empty()) {
-      ScheduleHeartbeat(w);
+  /// At rest: the next heartbeat if anyone reads, or the rest deadline if sooner; no wake
+  /// when neither (a pending wake is voided).
+  void ScheduleRest(WorldT& w, SteadyClock::time_point now = SteadyClock::now())
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    std::optional<SteadyClock::time_point> next;
+    if (!w.watchers.empty()) next = now + absl::ToChronoNanoseconds(limits_.heartbeat);
+    if (const std::optional<int64_t> d = Kind::RestDeadline(w); d.has_value()) {
+      const SteadyClock::time_point at = w.clock.Deadline(*d);
+      if (!next.has_value() || at < *next) next = at;
+    }
+    if (next.has_value()) {
+      Schedule(w, *next);
     } else {
       ++w.wake_generation;
     }
   }
+  /// A run ended by a call (reset, delete): its pending tick wake is void, and the rest timers
+  /// take over.
+  void AfterRunEndedByCall(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) { ScheduleRest(w); }
 
   // Counters the kinds keep up to date.
   void CountEvents(size_t n) { events_.fetch_add(static_cast<int64_t>(n)); }
@@ -442,7 +463,9 @@ class WorldHost {
       return;
     }
     if (!Kind::Running(w)) {
+      RestDeadline(w, now, &pump);
       Heartbeat(w, now, &pump);
+      ScheduleRest(w, now);
     } else if (const std::optional<CatchUpPlan> plan = CatchUp(w, now); plan.has_value()) {
       typename Kind::TickOut out;
       const Advanced advanced = AdvanceTicks(w, *plan, &out);
@@ -551,7 +574,21 @@ class WorldHost {
     return w.deleted || w.closed || generation != w.wake_generation;
   }
 
-  // Stage 2 (at rest): a heartbeat for the readers, then sleep until the next one.
+  // Stage 2a (at rest): what falls due at a tick while nothing moves (a shot clock), at that
+  // very tick however late the wake, published like a tick.
+  void RestDeadline(WorldT& w, SteadyClock::time_point now, Pump* pump)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    const std::optional<int64_t> deadline = Kind::RestDeadline(w);
+    if (!deadline.has_value() || w.clock.DueTick(now) < *deadline) return;
+    w.tick = std::max(w.tick, *deadline);
+    ++w.sequence;
+    std::vector<EventPtr> fresh;
+    Kind::AtRestDeadline(*this, w, &fresh);
+    CountEvents(fresh.size());
+    w.OfferAll(w.MakeFrame(w.tick, false, true), fresh, pump);
+  }
+
+  // Stage 2b (at rest): a heartbeat for the readers.
   void Heartbeat(WorldT& w, SteadyClock::time_point now, Pump* pump)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     if (w.watchers.empty()) return;
@@ -559,7 +596,6 @@ class WorldHost {
     for (const std::shared_ptr<Watcher>& r : w.watchers) {
       if (r->OfferHeartbeat(beat)) pump->push_back(r);
     }
-    Schedule(w, now + absl::ToChronoNanoseconds(limits_.heartbeat));
   }
 
   // Stage 3: which tick to advance to. Nothing due yet: sleep until the next deadline. Too far
@@ -620,14 +656,13 @@ class WorldHost {
     }
   }
 
-  // Stage 8: the next tick's deadline while running; after the end, heartbeats if anyone
-  // reads.
+  // Stage 8: the next tick's deadline while running; after the end, the rest timers.
   void Reschedule(WorldT& w, bool ended, SteadyClock::time_point now)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     if (!ended) {
       ScheduleNextTick(w);
-    } else if (!w.watchers.empty()) {
-      Schedule(w, now + absl::ToChronoNanoseconds(limits_.heartbeat));
+    } else {
+      ScheduleRest(w, now);
     }
   }
 

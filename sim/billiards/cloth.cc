@@ -20,7 +20,7 @@ MotionState Classify(const TableModel& model, const Ball& ball) {
   return MotionState::kStationary;
 }
 
-Rates ClothRates(const TableModel& model, uint32_t disabled, MotionState state,
+Rates ClothRates(const TableModel& model, uint32_t effects, MotionState state,
                  const Eigen::Vector3d& v, const Eigen::Vector3d& w) {
   Rates r;
   const PhysicsParams& p = model.params();
@@ -39,7 +39,7 @@ Rates ClothRates(const TableModel& model, uint32_t disabled, MotionState state,
     }
     case MotionState::kRolling: {
       const double speed = v.head<2>().norm();
-      if ((disabled & kEffectRollingResistance) == 0 && speed > 0) {
+      if ((effects & kEffectDisableRollingResistance) == 0 && speed > 0) {
         r.dv = -(p.mu_roll * p.gravity_mps2 / speed) * Eigen::Vector3d(v.x(), v.y(), 0.0);
       }
       break;
@@ -52,10 +52,10 @@ Rates ClothRates(const TableModel& model, uint32_t disabled, MotionState state,
   }
   const bool moving = state == MotionState::kSliding || state == MotionState::kRolling ||
                       state == MotionState::kSpinning;
-  if (moving && (disabled & kEffectSpinDecay) == 0) {
+  if (moving && (effects & kEffectDisableSpinDecay) == 0) {
     r.dw.z() -= p.spin_decel_rps2 * Sign(w.z());
   }
-  if (moving && (disabled & kEffectDrag) == 0) {
+  if (moving && (effects & kEffectEnableDrag) != 0) {
     const double m = model.mass();
     const double speed = v.norm();
     const double k = 0.5 * p.air_density_kgpm3 * p.drag_coefficient * 3.141592653589793 *
@@ -117,15 +117,15 @@ double ZeroTime(const TableModel& model, const Ball& ball, const Rates& rates,
 
 }  // namespace
 
-double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
+double TimeToZero(const TableModel& model, uint32_t effects, const Ball& ball,
                   TransitionKind kind) {
-  return ZeroTime(model, ball, ClothRates(model, disabled, ball.state, ball.v, ball.w), kind);
+  return ZeroTime(model, ball, ClothRates(model, effects, ball.state, ball.v, ball.w), kind);
 }
 
-NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball,
+NextTransition TimeToTransition(const TableModel& model, uint32_t effects, const Ball& ball,
                                 Rates* rates_out) {
   NextTransition next;
-  const Rates rates = ClothRates(model, disabled, ball.state, ball.v, ball.w);
+  const Rates rates = ClothRates(model, effects, ball.state, ball.v, ball.w);
   if (rates_out != nullptr) *rates_out = rates;
   for (TransitionKind kind :
        {TransitionKind::kSlideEnd, TransitionKind::kRollStop, TransitionKind::kSpinStop}) {

@@ -39,7 +39,7 @@ struct Rates {
   Eigen::Vector3d dv = Eigen::Vector3d::Zero();
   Eigen::Vector3d dw = Eigen::Vector3d::Zero();
 };
-Rates ClothRates(const TableModel& model, uint32_t disabled, MotionState state,
+Rates ClothRates(const TableModel& model, uint32_t effects, MotionState state,
                  const Eigen::Vector3d& v, const Eigen::Vector3d& w);
 
 /// What ends a ball's current smooth motion.
@@ -51,13 +51,13 @@ struct NextTransition {
 /// Time until the ball's next transition at its current rates: exact without drag (the rates
 /// are then constant in every state), an estimate with drag (the engine re-checks). The rates
 /// it used go to `rates_out` when given (the engine needs them too).
-NextTransition TimeToTransition(const TableModel& model, uint32_t disabled, const Ball& ball,
+NextTransition TimeToTransition(const TableModel& model, uint32_t effects, const Ball& ball,
                                 Rates* rates_out = nullptr);
 
 /// Time until one quantity (slip, speed or w_z, by `kind`) reaches zero at its current rate;
 /// infinity when it is not falling. With drag the engine uses it to re-check a predicted
 /// transition before snapping.
-double TimeToZero(const TableModel& model, uint32_t disabled, const Ball& ball,
+double TimeToZero(const TableModel& model, uint32_t effects, const Ball& ball,
                   TransitionKind kind);
 
 /// Snaps a ball whose transition is due: a sliding ball becomes rolling with the velocity that

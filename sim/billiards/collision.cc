@@ -7,7 +7,7 @@
 
 namespace sportsim::billiards {
 
-bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b) {
+bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
   Eigen::Vector3d n = b->r - a->r;
   n.z() = 0.0;
   const double dist = n.norm();
@@ -23,7 +23,7 @@ bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b) 
   const double jn = (1.0 + e) * 0.5 * m * approach;
   Eigen::Vector3d impulse_a = -jn * n;  // on ball a; ball b gets the opposite
   Eigen::Vector3d dw = Eigen::Vector3d::Zero();
-  if ((disabled & kEffectBallFriction) == 0) {
+  if ((effects & kEffectDisableBallFriction) == 0) {
     const Eigen::Vector3d u = v_rel + radius * (a->w + b->w).cross(n);
     const Eigen::Vector3d ut = u - u.dot(n) * n;
     const double slip = ut.norm();

@@ -38,7 +38,7 @@ inline constexpr double kRestingContactSpeed = 1e-3;
 
 /// Resolves a ball-ball contact. Does nothing (returns false) when the balls are not
 /// approaching along the line of centres faster than kMinApproachSpeed.
-bool CollideBalls(const TableModel& model, uint32_t disabled, Ball* a, Ball* b);
+bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 
 /// Resolves a ball-cushion contact; `normal` is the horizontal unit normal pointing from the
 /// cushion towards the ball's centre. Does nothing (returns false) when the ball is not moving

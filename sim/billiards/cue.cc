@@ -60,7 +60,7 @@ absl::Status CheckStrike(const TableModel& model, const CueStrike& s) {
 
 }  // namespace
 
-absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t disabled,
+absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t effects,
                                             const CueStrike& strike) {
   if (absl::Status s = CheckStrike(model, strike); !s.ok()) return s;
   const PhysicsParams& p = model.params();
@@ -109,7 +109,7 @@ absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t di
   out.v = (j / m) * d;
   out.v.z() = 0.0;
   out.w = (j / inertia) * rc.cross(d);
-  if ((disabled & kEffectSquirt) == 0 && s.a != 0.0) {
+  if ((effects & kEffectDisableSquirt) == 0 && s.a != 0.0) {
     const double a = s.a;
     const double alpha = std::atan(2.5 * a * std::sqrt(1.0 - a * a) /
                                    (1.0 + m / p.cue_end_mass_kg + 2.5 * (1.0 - a * a)));
@@ -167,7 +167,7 @@ absl::Status ValidateLayout(const TableModel& model, const TableState& state) {
   return absl::OkStatus();
 }
 
-absl::StatusOr<StrikeOutcome> ApplyStrike(const TableModel& model, uint32_t disabled,
+absl::StatusOr<StrikeOutcome> ApplyStrike(const TableModel& model, uint32_t effects,
                                           const CueStrike& strike, int cue, TableState* state) {
   if (cue < 0 || cue >= static_cast<int>(state->balls.size())) {
     return absl::InvalidArgumentError("no cue ball (id \"cue\") on the table");
@@ -181,7 +181,7 @@ absl::StatusOr<StrikeOutcome> ApplyStrike(const TableModel& model, uint32_t disa
   if (!state->AtRest()) {
     return absl::FailedPreconditionError("balls are still moving");
   }
-  absl::StatusOr<StrikeOutcome> out = ComputeStrike(model, disabled, strike);
+  absl::StatusOr<StrikeOutcome> out = ComputeStrike(model, effects, strike);
   if (!out.ok()) return out.status();
   Ball& b = state->balls[cue];
   b.v = out->v;

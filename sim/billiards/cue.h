@@ -58,7 +58,7 @@ struct StrikeOutcome {
 };
 
 /// Validates a strike (finite, in range, no miscue) and computes the ball's velocity and spin.
-absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t disabled,
+absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t effects,
                                             const CueStrike& strike);
 
 /// Checks a layout: every ball finite, on the cloth (centre inside the cushions by the contact
@@ -67,7 +67,7 @@ absl::Status ValidateLayout(const TableModel& model, const TableState& state);
 
 /// Validates the layout and the strike, then sets the velocity and spin of ball `cue` (which
 /// must be at rest, like every other ball) and its motion state. Changes nothing on error.
-absl::StatusOr<StrikeOutcome> ApplyStrike(const TableModel& model, uint32_t disabled,
+absl::StatusOr<StrikeOutcome> ApplyStrike(const TableModel& model, uint32_t effects,
                                           const CueStrike& strike, int cue, TableState* state);
 
 }  // namespace sportsim::billiards

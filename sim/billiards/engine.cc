@@ -11,6 +11,7 @@
 #include "sim/billiards/collision.h"
 #include "sim/billiards/event_engine.h"
 #include "sim/core/check.h"
+#include "sim/core/ode/runge_kutta.h"
 #include "sim/core/root_find.h"
 
 namespace sportsim::billiards {
@@ -29,46 +30,50 @@ constexpr int kMaxSubsteps = 1000000;
 bool Translating(const Ball& b) { return IsTranslating(b.state); }
 bool Moving(const Ball& b) { return IsMoving(b.state); }
 
+// A ball's (r; v, w) stacked for sim/core/ode (the rates do not depend on r).
+using BallVec = Eigen::Matrix<double, 9, 1>;
+
 // One integrator step of length h in the ball's current motion state.
-void IntegrateBall(const TableModel& model, uint32_t disabled, Integrator integrator, double h,
+void IntegrateBall(const TableModel& model, uint32_t effects, Integrator integrator, double h,
                    Ball* b) {
   if (!Moving(*b) || h <= 0.0) return;
   const MotionState s = b->state;
   const Eigen::Vector3d w0 = b->w;
+  // d(r; v, w)/dt = (v; cloth rates), autonomous.
+  const auto f = [&](double /*t*/, const BallVec& y) {
+    const Rates k = ClothRates(model, effects, s, y.segment<3>(3), y.segment<3>(6));
+    BallVec dy;
+    dy << y.segment<3>(3), k.dv, k.dw;
+    return dy;
+  };
   switch (integrator) {
-    case Integrator::kEuler: {
-      const Rates k = ClothRates(model, disabled, s, b->v, b->w);
-      b->r += h * b->v;
-      b->v += h * k.dv;
-      b->w += h * k.dw;
+    case Integrator::kEuler:
+    case Integrator::kRk4: {
+      BallVec y;
+      y << b->r, b->v, b->w;
+      const BallVec k1 = f(0.0, y);
+      const BallVec y1 = integrator == Integrator::kEuler ? ode::EulerStep(h, y, k1)
+                                                          : ode::Rk4Step(f, 0.0, h, y, k1);
+      b->r = y1.segment<3>(0);
+      b->v = y1.segment<3>(3);
+      b->w = y1.segment<3>(6);
       break;
     }
     case Integrator::kSemiImplicitEuler: {
-      const Rates k = ClothRates(model, disabled, s, b->v, b->w);
+      // Partitioned: the rates first, then the position from the new velocity.
+      const Rates k = ClothRates(model, effects, s, b->v, b->w);
       b->v += h * k.dv;
       b->w += h * k.dw;
       b->r += h * b->v;
       break;
     }
-    case Integrator::kRk4: {
-      const Eigen::Vector3d v0 = b->v;
-      const Rates k1 = ClothRates(model, disabled, s, v0, w0);
-      const Eigen::Vector3d v2 = v0 + 0.5 * h * k1.dv;
-      const Rates k2 = ClothRates(model, disabled, s, v2, w0 + 0.5 * h * k1.dw);
-      const Eigen::Vector3d v3 = v0 + 0.5 * h * k2.dv;
-      const Rates k3 = ClothRates(model, disabled, s, v3, w0 + 0.5 * h * k2.dw);
-      const Eigen::Vector3d v4 = v0 + h * k3.dv;
-      const Rates k4 = ClothRates(model, disabled, s, v4, w0 + h * k3.dw);
-      b->r += (h / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
-      b->v += (h / 6.0) * (k1.dv + 2.0 * k2.dv + 2.0 * k3.dv + k4.dv);
-      b->w += (h / 6.0) * (k1.dw + 2.0 * k2.dw + 2.0 * k3.dw + k4.dw);
-      break;
-    }
+    default:
+      break;  // ValidateSolverOptions admits only the three above
   }
   b->r.z() = model.radius();
   b->v.z() = 0.0;
   if (s == MotionState::kSpinning) b->v.setZero();
-  if ((disabled & kEffectOrientation) == 0) {
+  if ((effects & kEffectDisableOrientation) == 0) {
     // Rotate by the mean angular velocity over the step (exact about a fixed axis).
     const Eigen::Vector3d rot = 0.5 * h * (w0 + b->w);
     const double angle = rot.norm();
@@ -158,7 +163,7 @@ class SteppedEngine {
  private:
   Ball At(int i, double tau) const {
     Ball b = s_->balls[i];
-    IntegrateBall(model_, o_.disabled, o_.integrator, tau, &b);
+    IntegrateBall(model_, o_.effects, o_.integrator, tau, &b);
     return b;
   }
   Eigen::Vector2d PosAt(int i, double tau) const { return At(i, tau).r.head<2>(); }
@@ -190,7 +195,7 @@ class SteppedEngine {
         accel_[i] = 0.0;
         if (!Moving(s_->balls[i])) continue;
         Rates rates;
-        next_[i] = TimeToTransition(model_, o_.disabled, s_->balls[i], &rates);
+        next_[i] = TimeToTransition(model_, o_.effects, s_->balls[i], &rates);
         accel_[i] = rates.dv.norm();
         tau = std::min(tau, next_[i].dt_s);
       }
@@ -207,7 +212,7 @@ class SteppedEngine {
         if (c.found()) {
           for (size_t i = 0; i < n_; ++i) {
             if (Moving(s_->balls[i])) {
-              IntegrateBall(model_, o_.disabled, o_.integrator, c.tau, &s_->balls[i]);
+              IntegrateBall(model_, o_.effects, o_.integrator, c.tau, &s_->balls[i]);
             }
           }
           done += c.tau;
@@ -226,10 +231,10 @@ class SteppedEngine {
       for (size_t i = 0; i < n_; ++i) {
         if (next_[i].kind == TransitionKind::kNone || next_[i].dt_s > tau) continue;
         Ball& b = s_->balls[i];
-        if ((o_.disabled & kEffectDrag) == 0) {
+        if ((o_.effects & kEffectEnableDrag) != 0) {
           // With drag the predicted time is an estimate: snap only when the quantity has
           // (nearly) reached zero, else predict again.
-          if (TimeToZero(model_, o_.disabled, b, next_[i].kind) > 1e-9) continue;
+          if (TimeToZero(model_, o_.effects, b, next_[i].kind) > 1e-9) continue;
         }
         const MotionState from = b.state;
         ApplyTransition(model_, next_[i].kind, &b);
@@ -308,7 +313,7 @@ class SteppedEngine {
       }
       if (!ti) continue;
       // Cushions.
-      if (model_.spec().bounded && (o_.disabled & kEffectCushions) == 0) {
+      if (model_.spec().bounded && (o_.effects & kEffectDisableCushions) == 0) {
         const double dc = model_.cushion_contact_distance();
         const auto& cushions = model_.spec().cushions;
         for (size_t k = 0; k < cushions.size(); ++k) {
@@ -335,7 +340,7 @@ class SteppedEngine {
         }
       }
       // Pockets.
-      if (model_.spec().bounded && (o_.disabled & kEffectPockets) == 0) {
+      if (model_.spec().bounded && (o_.effects & kEffectDisablePockets) == 0) {
         const auto& pockets = model_.spec().pockets;
         for (size_t k = 0; k < pockets.size(); ++k) {
           const Pocket& pk = pockets[k];
@@ -367,7 +372,7 @@ class SteppedEngine {
         Ball& a = balls[c.a];
         Ball& b = balls[c.b];
         const MotionState fa = a.state, fb = b.state;
-        if (!CollideBalls(model_, o_.disabled, &a, &b)) return;
+        if (!CollideBalls(model_, o_.effects, &a, &b)) return;
         Record({.t_s = s_->t_s, .kind = EventKind::kBallBall, .a = c.a, .b = c.b,
                 .va = a.v.head<2>(), .vb = b.v.head<2>()});
         RecordTransition(c.a, fa);
@@ -410,7 +415,7 @@ class SteppedEngine {
   void RestingContacts() {
     auto& balls = s_->balls;
     const double radius = model_.radius();
-    const bool cushions = model_.spec().bounded && (o_.disabled & kEffectCushions) == 0;
+    const bool cushions = model_.spec().bounded && (o_.effects & kEffectDisableCushions) == 0;
     for (int pass = 0; pass < 16; ++pass) {  // Gauss-Seidel: a cluster settles in a few passes
       bool any = false;
       for (size_t i = 0; i < n_; ++i) {
@@ -435,7 +440,7 @@ class SteppedEngine {
           }
           any = true;
           const MotionState fi = balls[i].state, fj = balls[j].state;
-          if (CollideBalls(model_, o_.disabled, &balls[i], &balls[j])) {
+          if (CollideBalls(model_, o_.effects, &balls[i], &balls[j])) {
             RecordTransition(static_cast<int>(i), fi);
             RecordTransition(static_cast<int>(j), fj);
           }
@@ -473,7 +478,7 @@ class SteppedEngine {
       }
       if (!Translating(balls[i]) || !model_.spec().bounded) continue;
       const Eigen::Vector2d p = balls[i].r.head<2>();
-      if ((o_.disabled & kEffectCushions) == 0) {
+      if ((o_.effects & kEffectDisableCushions) == 0) {
         const auto& cushions = model_.spec().cushions;
         for (size_t k = 0; k < cushions.size(); ++k) {
           if ((p - ClosestOnSegment(cushions[k].a, cushions[k].b, p)).norm() <
@@ -483,7 +488,7 @@ class SteppedEngine {
           }
         }
       }
-      if ((o_.disabled & kEffectPockets) == 0) {
+      if ((o_.effects & kEffectDisablePockets) == 0) {
         const auto& pockets = model_.spec().pockets;
         for (size_t k = 0; k < pockets.size(); ++k) {
           if ((p - pockets[k].centre).norm() <= pockets[k].radius_m) {
@@ -583,30 +588,30 @@ std::span<const std::string_view> EngineNames() { return kEngines; }
 std::span<const std::string_view> IntegratorNames() { return kIntegrators; }
 
 std::string_view EngineName(Engine e) { return e == Engine::kEvent ? "event" : "stepped"; }
-std::string_view IntegratorName(Integrator i) { return kIntegrators[static_cast<size_t>(i)]; }
 
 absl::Status ValidateSolverOptions(const SolverOptions& o) {
   if (o.engine != Engine::kStepped && o.engine != Engine::kEvent) {
     return absl::InvalidArgumentError("engine must be event or stepped");
   }
-  if (static_cast<size_t>(o.integrator) >= kIntegrators.size()) {
+  if (o.integrator != Integrator::kEuler && o.integrator != Integrator::kSemiImplicitEuler &&
+      o.integrator != Integrator::kRk4) {
     return absl::InvalidArgumentError("integrator must be euler, semi_implicit_euler or rk4");
   }
   if (absl::Status s = CheckFiniteInRange("dt_s", o.dt_s, 1e-6, false, 0.1, false); !s.ok()) {
     return s;
   }
-  if ((o.disabled & ~static_cast<uint32_t>(kEffectAll)) != 0) {
-    return absl::InvalidArgumentError(absl::StrFormat("unknown effect bits 0x%x", o.disabled));
+  if (absl::Status s = ValidateEffectBits("effects", o.effects, kEffectKnownBits); !s.ok()) {
+    return s;
   }
   if (o.max_events < 1 || o.max_events > 10'000'000) {
     return absl::InvalidArgumentError(
         absl::StrFormat("max_events must be in [1, 10000000], got %d", o.max_events));
   }
   if (o.engine == Engine::kEvent) {
-    if ((o.disabled & kEffectDrag) == 0) {
+    if (EffectOn(o.effects, kEffectEnableDrag)) {
       return absl::InvalidArgumentError(
           "engine: the event engine cannot model air drag (it has no closed form): use engine "
-          "stepped or disable drag");
+          "stepped or leave drag off");
     }
   }
   return absl::OkStatus();

@@ -11,6 +11,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "sim/billiards/model.h"
+#include "sim/core/ode/integrator.h"
 #include "sim/billiards/state.h"
 
 namespace sportsim::billiards {
@@ -20,26 +21,30 @@ enum class Engine : uint8_t {
   kEvent,    ///< exact, event-driven (closed-form trajectories between events)
 };
 
-/// Integrators of the stepped engine, for (r, v, w) in a fixed motion state. Transitions and
-/// collisions split steps, so each scheme only ever integrates a smooth law; without drag that
-/// law has constant accelerations, which rk4 integrates exactly.
-enum class Integrator : uint8_t {
-  kEuler,              ///< explicit Euler, order 1: r += v h, v += a h (the chapter's scheme)
-  kSemiImplicitEuler,  ///< symplectic Euler, order 1: v += a h, then r += v h
-  kRk4,                ///< classical Runge-Kutta, order 4
-};
+/// Integrators of the stepped engine (sim/core/ode's one enum), for (r, v, w) in a fixed motion
+/// state. Transitions and collisions split steps, so each scheme only ever integrates a smooth
+/// law; without drag that law has constant accelerations, which rk4 integrates exactly. The
+/// stepped engine supports three:
+///   kEuler              explicit Euler, order 1: r += v h, v += a h (the chapter's scheme;
+///                       sim/core/ode/runge_kutta.h)
+///   kSemiImplicitEuler  symplectic Euler, order 1: v += a h, then r += v h (partitioned; written
+///                       in engine.cc for the ball's (r; v, w) split)
+///   kRk4                classical Runge-Kutta, order 4 (sim/core/ode/runge_kutta.h)
+using Integrator = ode::Integrator;
 
 std::span<const std::string_view> EngineNames();      ///< "event", "stepped"
 std::span<const std::string_view> IntegratorNames();  ///< "euler", "semi_implicit_euler", "rk4"
 std::string_view EngineName(Engine e);
-std::string_view IntegratorName(Integrator i);
+using ode::IntegratorName;  ///< "euler", "semi_implicit_euler", "rk4" (and the others)
 
 struct SolverOptions {
   Engine engine = Engine::kEvent;
   Integrator integrator = Integrator::kRk4;
-  double dt_s = 1.0 / 960.0;   ///< stepped engine: step (s), in [1e-6, 0.1]
+  double dt_s = 1.0 / 960.0;   ///< stepped engine: fixed step (s), in [1e-6, 0.1] (the engine
+                               ///< has fixed-step schemes only, so its accuracy is dt_s alone)
   bool ccd = true;             ///< stepped engine: continuous collision detection
-  uint32_t disabled = kEffectDrag;  ///< Effect bits switched off; drag is off by default
+  uint32_t effects = 0;        ///< Effect bits (model.h); 0 = default physics (no air drag;
+                               ///< kEffectEnableDrag switches it on, stepped engine only)
   /// A run that handles more events stops with ResourceExhausted. The stepped engine counts the
   /// events it records; the event engine counts every event it processes (collisions,
   /// transitions and the resting-contact pushes it does not report).

@@ -137,9 +137,9 @@ class EventSimulation final : public TableSimulation {
         t_(state_.t_s),
         d_(2.0 * model.radius()),
         dc_(model.cushion_contact_distance()),
-        cushions_(model.spec().bounded && (options.disabled & kEffectCushions) == 0),
-        pockets_(model.spec().bounded && (options.disabled & kEffectPockets) == 0),
-        orientation_((options.disabled & kEffectOrientation) == 0),
+        cushions_(model.spec().bounded && (options.effects & kEffectDisableCushions) == 0),
+        pockets_(model.spec().bounded && (options.effects & kEffectDisablePockets) == 0),
+        orientation_((options.effects & kEffectDisableOrientation) == 0),
         half_(0.5 * model.spec().length_m + model.radius(),
               0.5 * model.spec().width_m + model.radius()) {
     resting_.resize(state_.balls.size());
@@ -215,7 +215,7 @@ class EventSimulation final : public TableSimulation {
     tr.next_kind = TransitionKind::kNone;
     if (IsMoving(b.state)) {
       Rates rates;
-      const NextTransition next = TimeToTransition(model_, o_.disabled, b, &rates);
+      const NextTransition next = TimeToTransition(model_, o_.effects, b, &rates);
       if (IsTranslating(b.state)) tr.a = rates.dv.head<2>();
       if (b.state == MotionState::kSpinning) tr.v0.setZero();
       tr.alpha = rates.dw;
@@ -602,7 +602,7 @@ class EventSimulation final : public TableSimulation {
     const MotionState fa = a.state, fb = b.state;
     const Eigen::Vector2d n0 = (b.r - a.r).head<2>().normalized();
     const bool plastic = (a.v - b.v).head<2>().dot(n0) < kRestingContactSpeed;
-    if (CollideBalls(model_, o_.disabled, &a, &b)) {
+    if (CollideBalls(model_, o_.effects, &a, &b)) {
       const bool ra = Report(ia, ib, plastic), rb = Report(ib, ia, plastic);
       if (ra || rb) {
         events->push_back({.t_s = t_, .kind = EventKind::kBallBall, .a = ia, .b = ib,

@@ -26,22 +26,37 @@
 #include "Eigen/Core"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "sim/core/effects.h"
 
 namespace sportsim::billiards {
 
-/// Physical effects that can be switched off (bits of SolverOptions::disabled; 0 = everything
-/// on). A switched-off effect is skipped, not multiplied by zero.
+/// Effect bits of SolverOptions::effects (the convention of sim/core/effects.h): 0 = the default
+/// physics, which has everything on except air drag. A Disable bit switches an effect that is on
+/// by default off (it is skipped, not multiplied by zero); the Enable bit switches air drag,
+/// which is off by default, on.
 enum Effect : uint32_t {
-  kEffectDrag = 1u << 0,               ///< air drag on the ball (stepped engine only)
-  kEffectSpinDecay = 1u << 1,          ///< spin-down of the vertical spin component
-  kEffectRollingResistance = 1u << 2,  ///< rolling resistance (a rolling ball never slows)
-  kEffectBallFriction = 1u << 3,       ///< ball-ball friction (off: frictionless collisions)
-  kEffectCushions = 1u << 4,           ///< cushions and jaws (off: balls leave the table)
-  kEffectPockets = 1u << 5,            ///< pocket capture
-  kEffectOrientation = 1u << 6,        ///< orientation (quaternion) tracking
-  kEffectSquirt = 1u << 7,             ///< cue-ball squirt (deflection with english)
-  kEffectAll = (1u << 8) - 1,
+  kEffectEnableDrag = 1u << 0,                ///< air drag on the ball (stepped engine only)
+  kEffectDisableSpinDecay = 1u << 1,          ///< no spin-down of the vertical spin component
+  kEffectDisableRollingResistance = 1u << 2,  ///< no rolling resistance (a rolling ball never slows)
+  kEffectDisableBallFriction = 1u << 3,       ///< no ball-ball friction (frictionless collisions)
+  kEffectDisableCushions = 1u << 4,           ///< no cushions and jaws (balls leave the table)
+  kEffectDisablePockets = 1u << 5,            ///< no pocket capture
+  kEffectDisableOrientation = 1u << 6,        ///< no orientation (quaternion) tracking
+  kEffectDisableSquirt = 1u << 7,             ///< no cue-ball squirt (deflection with english)
+  kEffectKnownBits = (1u << 8) - 1,           ///< every known bit
 };
+/// The bits that switch an effect ON (the others switch one off).
+inline constexpr uint32_t kEffectEnableBits = kEffectEnableDrag;
+
+/// Whether the effect of `bit` (any Effect bit) is on in `effects`.
+constexpr bool EffectOn(uint32_t effects, uint32_t bit) {
+  return sportsim::EffectOn(effects, bit, kEffectEnableBits);
+}
+/// `effects` with the effect of `bit` switched on or off (sets or clears the bit as its kind
+/// says): what a "disable" or "enable" list in a request does.
+constexpr uint32_t WithEffect(uint32_t effects, uint32_t bit, bool on) {
+  return sportsim::WithEffect(effects, bit, on, kEffectEnableBits);
+}
 
 /// Names of the effects, in bit order ("drag", "spin_decay", ...).
 std::span<const std::string_view> EffectNames();

@@ -6,17 +6,18 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 #include "sim/core/check.h"
+#include "sim/core/effects.h"
 
 namespace sportsim::swing {
 
-SwingModel::SwingModel(const SwingParams& params, uint32_t disabled)
-    : params_(params), disabled_(disabled) {
-  g_ = (disabled & kSwingGravity) ? 0.0 : params.gravity_mps2;
-  a_ = (disabled & kSwingShoulderAccel) ? 0.0 : params.shoulder_accel_mps2;
+SwingModel::SwingModel(const SwingParams& params, uint32_t effects)
+    : params_(params), effects_(effects) {
+  g_ = (effects & kSwingDisableGravity) ? 0.0 : params.gravity_mps2;
+  a_ = (effects & kSwingDisableShoulderAccel) ? 0.0 : params.shoulder_accel_mps2;
   arm_static_ = params.arm_first_moment_kgm + params.club_mass_kg * params.arm_length_m;
 }
 
-absl::StatusOr<SwingModel> SwingModel::Create(const SwingParams& p, uint32_t disabled) {
+absl::StatusOr<SwingModel> SwingModel::Create(const SwingParams& p, uint32_t effects) {
   struct Check {
     std::string_view name;
     double value, lo, hi;
@@ -40,9 +41,8 @@ absl::StatusOr<SwingModel> SwingModel::Create(const SwingParams& p, uint32_t dis
       return s;
     }
   }
-  if ((disabled & ~static_cast<uint32_t>(kSwingAllEffects)) != 0) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("disabled effects: unknown bits 0x%x", disabled & ~kSwingAllEffects));
+  if (absl::Status s = ValidateEffectBits("swing effects", effects, kSwingEffectBits); !s.ok()) {
+    return s;
   }
   // det M(beta) = I (J + Mc R^2) - R^2 S^2 cos^2(beta) is smallest at cos^2 = 1.
   const double r = p.arm_length_m, s = p.club_first_moment_kgm;
@@ -55,7 +55,7 @@ absl::StatusOr<SwingModel> SwingModel::Create(const SwingParams& p, uint32_t dis
         "= %g",
         scale, r * r * s * s));
   }
-  return SwingModel(p, disabled);
+  return SwingModel(p, effects);
 }
 
 }  // namespace sportsim::swing

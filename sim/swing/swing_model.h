@@ -35,13 +35,14 @@ struct SwingParams {
   double shoulder_accel_mps2 = 0.98;           ///< A: shoulder acceleration toward the target, 0.1 g (m/s^2)
 };
 
-/// Effects that can be switched off; 0 = full physics. A switched-off effect is skipped in the
-/// force evaluation, not multiplied by zero.
+/// Effect bits (the convention of sim/core/effects.h): 0 = full physics; every swing effect is
+/// on by default, so each bit switches one off. A switched-off effect is skipped in the force
+/// evaluation, not multiplied by zero.
 enum SwingEffect : uint32_t {
-  kSwingGravity = 1u << 0,        ///< no gravity terms
-  kSwingShoulderAccel = 1u << 1,  ///< the shoulder does not accelerate
-  kSwingWristTorque = 1u << 2,    ///< Q_beta is zero whatever the program says (free hinge)
-  kSwingAllEffects = (1u << 3) - 1,
+  kSwingDisableGravity = 1u << 0,        ///< no gravity terms
+  kSwingDisableShoulderAccel = 1u << 1,  ///< the shoulder does not accelerate
+  kSwingDisableWristTorque = 1u << 2,    ///< Q_beta is zero whatever the program says (free hinge)
+  kSwingEffectBits = (1u << 3) - 1,      ///< every known bit
 };
 
 /// A validated, immutable swing model with the constants the dynamics need precomputed.
@@ -50,21 +51,21 @@ class SwingModel {
   /// Validates `params`: every value finite; lengths in (0, 5] m; inertias, masses in (0, 100];
   /// first moments in [0, 100]; g and A in [0, 100] m/s^2; gamma and beta0 in [-2 pi, 2 pi]; the
   /// mass matrix positive definite at every wrist angle: I (J + Mc R^2) > R^2 S^2.
-  static absl::StatusOr<SwingModel> Create(const SwingParams& params, uint32_t disabled = 0);
+  static absl::StatusOr<SwingModel> Create(const SwingParams& params, uint32_t effects = 0);
 
   const SwingParams& params() const { return params_; }
-  uint32_t disabled() const { return disabled_; }
+  uint32_t effects() const { return effects_; }
   bool gravity_on() const { return g_ != 0.0 || a_ != 0.0; }
   double g() const { return g_; }              ///< gravity in use (0 when switched off)
   double a() const { return a_; }              ///< shoulder acceleration in use (0 when off)
-  bool wrist_torque_on() const { return (disabled_ & kSwingWristTorque) == 0; }
+  bool wrist_torque_on() const { return (effects_ & kSwingDisableWristTorque) == 0; }
   double arm_static_moment() const { return arm_static_; }  ///< S_A + Mc R (kg m)
 
  private:
-  SwingModel(const SwingParams& params, uint32_t disabled);
+  SwingModel(const SwingParams& params, uint32_t effects);
 
   SwingParams params_;
-  uint32_t disabled_ = 0;
+  uint32_t effects_ = 0;
   double g_ = 0.0;
   double a_ = 0.0;
   double arm_static_ = 0.0;

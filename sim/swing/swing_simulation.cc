@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "absl/strings/str_format.h"
-#include "sim/core/root_find.h"
+#include "sim/core/ode/event.h"
 #include "sim/swing/swing_dynamics.h"
 
 namespace sportsim::swing {
@@ -45,7 +45,8 @@ std::optional<std::pair<double, SwingVec>> FindImpactInStep(SwingStepper& steppe
   const double target = kTwoPi * (std::ceil(phi0 / kTwoPi) - 1.0);
   if (!(phi1 <= target)) return std::nullopt;
   auto g = [&](double t) { return Phi(m, stepper.Interpolate(r, t)) - target; };
-  const double t = FindBracketedRoot(g, r.t0, r.t1, phi0 - target, phi1 - target, kImpactTimeTol);
+  const double t =
+      ode::LocateOnInterpolant(g, r.t0, r.t1, phi0 - target, phi1 - target, kImpactTimeTol);
   return std::make_pair(t, stepper.Interpolate(r, t));
 }
 
@@ -70,8 +71,7 @@ absl::Status ValidateRunOptions(const SwingSolverOptions& solver, const SwingRun
   const double samples =
       solver.integrator == SwingIntegrator::kDp45
           ? 0.0
-          : run.duration_s / solver.dt_s.value_or(SwingSolverOptions::kDefaultDt) /
-                run.sample_stride;
+          : run.duration_s / solver.dt() / run.sample_stride;
   if (samples > SwingRunOptions::kMaxSamples) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "the run would keep about %.0f samples, more than %d: raise sample_stride (or "

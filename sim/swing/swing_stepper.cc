@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "absl/strings/str_format.h"
+#include "sim/core/ode/hermite.h"
 
 namespace sportsim::swing {
 namespace {
@@ -21,36 +22,18 @@ absl::Status NonFinite(double t) {
       t));
 }
 
-// Dormand-Prince 5(4) tableau (Dormand & Prince 1980; Hairer, Norsett & Wanner table II.5.2).
-constexpr double kC2 = 1.0 / 5, kC3 = 3.0 / 10, kC4 = 4.0 / 5, kC5 = 8.0 / 9;
-constexpr double kA21 = 1.0 / 5;
-constexpr double kA31 = 3.0 / 40, kA32 = 9.0 / 40;
-constexpr double kA41 = 44.0 / 45, kA42 = -56.0 / 15, kA43 = 32.0 / 9;
-constexpr double kA51 = 19372.0 / 6561, kA52 = -25360.0 / 2187, kA53 = 64448.0 / 6561,
-                 kA54 = -212.0 / 729;
-constexpr double kA61 = 9017.0 / 3168, kA62 = -355.0 / 33, kA63 = 46732.0 / 5247,
-                 kA64 = 49.0 / 176, kA65 = -5103.0 / 18656;
-constexpr double kA71 = 35.0 / 384, kA73 = 500.0 / 1113, kA74 = 125.0 / 192,
-                 kA75 = -2187.0 / 6784, kA76 = 11.0 / 84;
-// Fifth-order weights minus fourth-order weights (the error estimate).
-constexpr double kE1 = 71.0 / 57600, kE3 = -71.0 / 16695, kE4 = 71.0 / 1920,
-                 kE5 = -17253.0 / 339200, kE6 = 22.0 / 525, kE7 = -1.0 / 40;
-// Continuous extension (Hairer, Norsett & Wanner, dense output of DOPRI5).
-constexpr double kD1 = -12715105075.0 / 11282082432, kD3 = 87487479700.0 / 32700410799,
-                 kD4 = -10690763975.0 / 1880347072, kD5 = 701980252875.0 / 199316789632,
-                 kD6 = -1453857185.0 / 822651844, kD7 = 69997945.0 / 29380423;
-
 }  // namespace
 
+const ode::AccuracyLimits SwingSolverOptions::kLimits = {
+    .default_dt_s = kDefaultDt,
+    .dt_s = {.lo = 1e-6, .hi = 0.1},
+    .default_tolerance = kDefaultTolerance,
+    .tolerance = {.lo = 1e-14, .hi = 0.1},
+    .default_max_step_s = kDefaultMaxStep,
+    .max_step_s = {.lo = 1e-6, .hi = 0.1}};
+
 std::string_view SwingIntegratorName(SwingIntegrator integrator) {
-  switch (integrator) {
-    case SwingIntegrator::kBook: return "book";
-    case SwingIntegrator::kEuler: return "euler";
-    case SwingIntegrator::kSemiImplicitEuler: return "semi_implicit_euler";
-    case SwingIntegrator::kRk4: return "rk4";
-    case SwingIntegrator::kDp45: return "dp45";
-  }
-  return "unknown";
+  return ode::IntegratorName(integrator);
 }
 
 std::optional<SwingIntegrator> SwingIntegratorFromName(std::string_view name) {
@@ -61,33 +44,15 @@ std::optional<SwingIntegrator> SwingIntegratorFromName(std::string_view name) {
 }
 
 absl::Status ValidateSolverOptions(const SwingSolverOptions& o) {
-  const bool adaptive = o.integrator == SwingIntegrator::kDp45;
-  const std::string_view name = SwingIntegratorName(o.integrator);
-  if (adaptive && o.dt_s.has_value()) {
-    return absl::InvalidArgumentError(
-        "dt_s applies to fixed-step integrators; dp45 takes tolerance and max_step_s");
-  }
-  if (!adaptive && o.tolerance.has_value()) {
+  if (std::find(kAllSwingIntegrators.begin(), kAllSwingIntegrators.end(), o.integrator) ==
+      kAllSwingIntegrators.end()) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "tolerance applies to dp45 only; %s is a fixed-step integrator: set dt_s", name));
+        "integrator must be book, euler, semi_implicit_euler, rk4 or dp45, got %d",
+        static_cast<int>(o.integrator)));
   }
-  if (!adaptive && o.max_step_s.has_value()) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "max_step_s applies to dp45 only; %s is a fixed-step integrator: set dt_s", name));
-  }
-  if (o.dt_s && !(std::isfinite(*o.dt_s) && *o.dt_s >= 1e-6 && *o.dt_s <= 0.1)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("dt_s must be finite and in [1e-06, 0.1] s, got %g", *o.dt_s));
-  }
-  if (o.tolerance && !(std::isfinite(*o.tolerance) && *o.tolerance >= 1e-14 &&
-                       *o.tolerance <= 0.1)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("tolerance must be finite and in [1e-14, 0.1], got %g", *o.tolerance));
-  }
-  if (o.max_step_s && !(std::isfinite(*o.max_step_s) && *o.max_step_s >= 1e-6 &&
-                        *o.max_step_s <= 0.1)) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("max_step_s must be finite and in [1e-06, 0.1] s, got %g", *o.max_step_s));
+  if (absl::Status s = ode::ValidateAccuracy(o.integrator, o.accuracy, SwingSolverOptions::kLimits);
+      !s.ok()) {
+    return s;
   }
   if (!(std::isfinite(o.max_turn_per_step_rad) && o.max_turn_per_step_rad > 0 &&
         o.max_turn_per_step_rad <= kPi)) {
@@ -106,9 +71,9 @@ SwingStepper::SwingStepper(const SwingModel* model, const TorqueProgram* program
     : model_(model),
       program_(program),
       integrator_(o.integrator),
-      dt_(o.dt_s.value_or(SwingSolverOptions::kDefaultDt)),
-      tol_(o.tolerance.value_or(SwingSolverOptions::kDefaultTolerance)),
-      max_step_(o.max_step_s.value_or(SwingSolverOptions::kDefaultMaxStep)),
+      dt_(o.accuracy.dt_s.value_or(SwingSolverOptions::kDefaultDt)),
+      tol_(o.accuracy.tolerance.value_or(SwingSolverOptions::kDefaultTolerance)),
+      max_step_(o.accuracy.max_step_s.value_or(SwingSolverOptions::kDefaultMaxStep)),
       max_turn_(o.max_turn_per_step_rad),
       y_(InitialState(*model)) {}
 
@@ -161,7 +126,7 @@ absl::Status SwingStepper::FixedStep(double t_limit, StepRecord* rec) {
   SwingVec y1;
   switch (integrator_) {
     case SwingIntegrator::kEuler: {
-      y1 = y + h * F(seg, t_, y);
+      y1 = ode::EulerStep(h, y, F(seg, t_, y));
       break;
     }
     case SwingIntegrator::kSemiImplicitEuler: {
@@ -186,11 +151,8 @@ absl::Status SwingStepper::FixedStep(double t_limit, StepRecord* rec) {
       break;
     }
     case SwingIntegrator::kRk4: {
-      const SwingVec k1 = F(seg, t_, y);
-      const SwingVec k2 = F(seg, t_ + 0.5 * h, y + (0.5 * h) * k1);
-      const SwingVec k3 = F(seg, t_ + 0.5 * h, y + (0.5 * h) * k2);
-      const SwingVec k4 = F(seg, t_ + h, y + h * k3);
-      y1 = y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+      const auto f = [&](double t, const SwingVec& x) { return F(seg, t, x); };
+      y1 = ode::Rk4Step(f, t_, h, y, F(seg, t_, y));
       break;
     }
     case SwingIntegrator::kDp45:
@@ -222,20 +184,14 @@ absl::Status SwingStepper::FixedStep(double t_limit, StepRecord* rec) {
 }
 
 double SwingStepper::Dp45InitialStep(double t_end) {
-  // Hairer, Norsett & Wanner's starting-step heuristic (Solving ODEs I, sec. II.4).
+  // Hairer, Norsett & Wanner's starting-step heuristic (sim/core/ode/runge_kutta.h).
+  const int seg = segment_;
+  const auto f = [&](double t, const SwingVec& x) { return F(seg, t, x); };
   const SwingVec f0 = F(segment_, t_, y_);
-  const SwingVec sk = tol_ * (SwingVec::Ones() + y_.cwiseAbs());
-  const double d0 = std::sqrt((y_.cwiseQuotient(sk)).squaredNorm() / 4.0);
-  const double d1 = std::sqrt((f0.cwiseQuotient(sk)).squaredNorm() / 4.0);
-  double h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
-  h0 = std::min({h0, max_step_, t_end - t_});
-  const SwingVec f1 = F(segment_, t_ + h0, y_ + h0 * f0);
-  const double d2 = std::sqrt(((f1 - f0).cwiseQuotient(sk)).squaredNorm() / 4.0) / h0;
-  const double dm = std::max(d1, d2);
-  const double h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / 5.0);
+  const double h = ode::Dp45InitialStep(f, t_, y_, f0, tol_, max_step_, t_end);
   k1_ = f0;
   fsal_valid_ = true;
-  return std::min({100.0 * h0, h1, max_step_});
+  return h;
 }
 
 absl::Status SwingStepper::Dp45Step(double t_limit, StepRecord* rec) {
@@ -249,6 +205,7 @@ absl::Status SwingStepper::Dp45Step(double t_limit, StepRecord* rec) {
   const int seg = segment_;
   const SwingVec& y = y_;
   const SwingVec& k1 = k1_;
+  const auto f = [&](double t, const SwingVec& x) { return F(seg, t, x); };
   bool rejected_last = false;
   for (int attempt = 0;; ++attempt) {
     double h = std::min(h_, max_step_);
@@ -264,21 +221,12 @@ absl::Status SwingStepper::Dp45Step(double t_limit, StepRecord* rec) {
           "tolerance %g",
           t_, tol_));
     }
-    const SwingVec k2 = F(seg, t_ + kC2 * h, y + h * (kA21 * k1));
-    const SwingVec k3 = F(seg, t_ + kC3 * h, y + h * (kA31 * k1 + kA32 * k2));
-    const SwingVec k4 = F(seg, t_ + kC4 * h, y + h * (kA41 * k1 + kA42 * k2 + kA43 * k3));
-    const SwingVec k5 =
-        F(seg, t_ + kC5 * h, y + h * (kA51 * k1 + kA52 * k2 + kA53 * k3 + kA54 * k4));
     const double t1 = to_stop ? t_stop : t_ + h;
-    const SwingVec k6 =
-        F(seg, t1, y + h * (kA61 * k1 + kA62 * k2 + kA63 * k3 + kA64 * k4 + kA65 * k5));
-    const SwingVec y1 =
-        y + h * (kA71 * k1 + kA73 * k3 + kA74 * k4 + kA75 * k5 + kA76 * k6);
+    ode::Dp45Stages<SwingVec> st;
+    const SwingVec y1 = ode::Dp45Solution(f, t_, h, y, k1, &st, t1);
     const SwingVec k7 = F(seg, t1, y1);
-    const SwingVec err =
-        h * (kE1 * k1 + kE3 * k3 + kE4 * k4 + kE5 * k5 + kE6 * k6 + kE7 * k7);
-    const SwingVec sk = tol_ * (SwingVec::Ones() + y.cwiseAbs().cwiseMax(y1.cwiseAbs()));
-    const double e = std::sqrt(err.cwiseQuotient(sk).squaredNorm() / 4.0);
+    const double e = ode::Dp45ErrorNorm(ode::Dp45Error(h, k1, st, k7), y, y1, tol_,
+                                        ode::ErrorNorm::kRms);
     if (!std::isfinite(e) || !AllFinite(y1)) {
       // Treat as a failed step: shrink hard, and give up only on underflow.
       ++rejected_;
@@ -287,15 +235,10 @@ absl::Status SwingStepper::Dp45Step(double t_limit, StepRecord* rec) {
       if (attempt > 60) return NonFinite(t1);
       continue;
     }
-    double fac = 0.9 * std::pow(std::max(e, 1e-10), -0.2);
+    const double fac = ode::Dp45StepFactor(e, rejected_last);
     if (e <= 1.0) {
-      fac = std::clamp(fac, 0.2, rejected_last ? 1.0 : 5.0);
       *rec = StepRecord{.t0 = t_, .t1 = t1, .y0 = y, .y1 = y1, .segment = seg, .dense = true};
-      rec->rcont[0] = y;
-      rec->rcont[1] = y1 - y;
-      rec->rcont[2] = h * k1 - rec->rcont[1];
-      rec->rcont[3] = rec->rcont[1] - h * k7 - rec->rcont[2];
-      rec->rcont[4] = h * (kD1 * k1 + kD3 * k3 + kD4 * k4 + kD5 * k5 + kD6 * k6 + kD7 * k7);
+      rec->continuous = ode::MakeDp45Dense(h, y, y1, k1, st, k7);
       y_ = y1;
       t_ = t1;
       k1_ = k7;
@@ -310,7 +253,7 @@ absl::Status SwingStepper::Dp45Step(double t_limit, StepRecord* rec) {
     }
     ++rejected_;
     rejected_last = true;
-    h_ = h * std::clamp(fac, 0.2, 1.0);
+    h_ = h * fac;
   }
 }
 
@@ -318,40 +261,24 @@ SwingVec SwingStepper::Interpolate(const StepRecord& r, double t) {
   const double h = r.t1 - r.t0;
   if (h <= 0) return r.y1;
   const double s = (t - r.t0) / h;
-  if (r.dense) {
-    const double s1 = 1.0 - s;
-    return r.rcont[0] +
-           s * (r.rcont[1] + s1 * (r.rcont[2] + s * (r.rcont[3] + s1 * r.rcont[4])));
-  }
+  if (r.dense) return r.continuous(s);
   const SwingVec f0 = F(r.segment, r.t0, r.y0);
   const SwingVec f1 = F(r.segment, r.t1, r.y1);
-  const double s2 = s * s, s3 = s2 * s;
   if (integrator_ != SwingIntegrator::kRk4) {
     // First-order schemes: their angles and rates agree only to O(h), so each component gets its
     // own cubic Hermite (angles from rates, rates from accelerations), consistent to that order.
-    return (2 * s3 - 3 * s2 + 1) * r.y0 + (s3 - 2 * s2 + s) * h * f0 + (3 * s2 - 2 * s3) * r.y1 +
-           (s3 - s2) * h * f1;
+    return ode::CubicHermite(r.y0, f0, r.y1, f1, h, s);
   }
   // RK4: quintic Hermite for the angles from their values, rates and accelerations at both ends
   // (interpolation error O(h^6), below the scheme's O(h^4)); the rates are its derivative. A
   // cubic's O(h^4) error is as large as RK4's own and blurs its observed order.
-  const double s4 = s3 * s, s5 = s4 * s;
-  const double h0 = 1 - 10 * s3 + 15 * s4 - 6 * s5, h5 = 1 - h0;
-  const double h1 = s - 6 * s3 + 8 * s4 - 3 * s5;
-  const double h2 = 0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5;
-  const double h3 = 0.5 * s3 - s4 + 0.5 * s5;
-  const double h4 = -4 * s3 + 7 * s4 - 3 * s5;
-  const double d0 = -30 * s2 + 60 * s3 - 30 * s4, d5 = -d0;
-  const double d1 = 1 - 18 * s2 + 32 * s3 - 15 * s4;
-  const double d2 = s - 4.5 * s2 + 6 * s3 - 2.5 * s4;
-  const double d3 = 1.5 * s2 - 4 * s3 + 2.5 * s4;
-  const double d4 = -12 * s2 + 28 * s3 - 15 * s4;
-  const Eigen::Vector2d p0 = r.y0.head<2>(), p1 = r.y1.head<2>();
-  const Eigen::Vector2d v0 = r.y0.tail<2>(), v1 = r.y1.tail<2>();
-  const Eigen::Vector2d a0 = f0.tail<2>(), a1 = f1.tail<2>();
+  Eigen::Vector2d p, v;
+  ode::QuinticHermite<Eigen::Vector2d>(r.y0.head<2>(), r.y0.tail<2>(), f0.tail<2>(),
+                                       r.y1.head<2>(), r.y1.tail<2>(), f1.tail<2>(), h, s, &p,
+                                       &v);
   SwingVec out;
-  out.head<2>() = h0 * p0 + h1 * h * v0 + h2 * h * h * a0 + h3 * h * h * a1 + h4 * h * v1 + h5 * p1;
-  out.tail<2>() = (d0 * p0 + d5 * p1) / h + d1 * v0 + d2 * h * a0 + d3 * h * a1 + d4 * v1;
+  out.head<2>() = p;
+  out.tail<2>() = v;
   return out;
 }
 

@@ -3,14 +3,18 @@
 //  kBook               The chapter's scheme (Bourg & Bywalec ch. 19): four acceleration
 //                      evaluations per step that update only the rates (positions held), an
 //                      RK4-weighted rate update, then positions from the new rates. First order.
-//  kEuler              Explicit Euler on the full state. First order.
+//                      It is not a Runge-Kutta tableau (positions are held through the
+//                      stages), so it stays here, written out.
+//  kEuler              Explicit Euler on the full state (sim/core/ode/runge_kutta.h). First
+//                      order.
 //  kSemiImplicitEuler  Symplectic Euler: rates from the old state, positions from the new
-//                      rates. First order.
-//  kRk4                Classical fourth-order Runge-Kutta on the full state. Fourth order.
-//  kDp45               Dormand & Prince, "A family of embedded Runge-Kutta formulae", J. Comput.
-//                      Appl. Math. 6 (1980): fifth-order solution, fourth-order error estimate,
-//                      first-same-as-last; step control and the fourth-order continuous
-//                      extension as in Hairer, Norsett & Wanner, Solving ODEs I, sec. II.4-6.
+//                      rates. First order. A partitioned scheme (not one tableau for the whole
+//                      state), written here for the swing's (angles, rates) split.
+//  kRk4                Classical fourth-order Runge-Kutta on the full state
+//                      (sim/core/ode/runge_kutta.h). Fourth order.
+//  kDp45               Dormand & Prince 5(4) with error control (RMS norm) and the
+//                      fourth-order continuous extension (sim/core/ode/runge_kutta.h, which
+//                      cites the tableau and the controller).
 //
 // Fixed-step schemes step on the grid t_k = k dt (k an integer, never an accumulated sum). A
 // torque breakpoint or stop time inside a grid step splits it, so every scheme honours switch
@@ -27,28 +31,32 @@
 
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "sim/core/ode/integrator.h"
+#include "sim/core/ode/runge_kutta.h"
 #include "sim/swing/swing_dynamics.h"
 #include "sim/swing/swing_model.h"
 #include "sim/swing/torque_program.h"
 
 namespace sportsim::swing {
 
-enum class SwingIntegrator { kBook, kEuler, kSemiImplicitEuler, kRk4, kDp45 };
+/// The swing's integrators are sim/core/ode's (the one enum); the swing supports all five.
+using SwingIntegrator = ode::Integrator;
 
-/// "book", "euler", "semi_implicit_euler", "rk4", "dp45".
+/// "book", "euler", "semi_implicit_euler", "rk4", "dp45" (ode::IntegratorName).
 std::string_view SwingIntegratorName(SwingIntegrator integrator);
 std::optional<SwingIntegrator> SwingIntegratorFromName(std::string_view name);
+/// The schemes the swing supports, in the order the tools list them.
 inline constexpr std::array<SwingIntegrator, 5> kAllSwingIntegrators = {
     SwingIntegrator::kBook, SwingIntegrator::kEuler, SwingIntegrator::kSemiImplicitEuler,
     SwingIntegrator::kRk4, SwingIntegrator::kDp45};
 
-/// Solver choice. Fixed-step schemes take dt_s; dp45 takes tolerance and max_step_s; giving a
-/// scheme the other kind's setting is an InvalidArgument error, never silently ignored.
+/// Solver choice and the accuracy contract (sim/core/ode/integrator.h): fixed-step schemes take
+/// accuracy.dt_s (s, [1e-6, 0.1], default kDefaultDt); dp45 takes accuracy.tolerance ([1e-14,
+/// 0.1], default kDefaultTolerance) and accuracy.max_step_s (s, [1e-6, 0.1], default
+/// kDefaultMaxStep). Giving a scheme the other kind's setting is an InvalidArgument error.
 struct SwingSolverOptions {
   SwingIntegrator integrator = SwingIntegrator::kRk4;
-  std::optional<double> dt_s;        ///< fixed step (s), in [1e-6, 0.1]; default kDefaultDt
-  std::optional<double> tolerance;   ///< dp45 relative and absolute tolerance, [1e-14, 0.1]; default 1e-8
-  std::optional<double> max_step_s;  ///< dp45 largest step (s), (0, 0.1]; default 0.01
+  ode::Accuracy accuracy;  ///< dt_s, or tolerance and max_step_s (see above)
   /// Fixed steps: the largest angle (rad) any of alpha, beta, phi may turn in one step before the
   /// run is stopped as under-resolved (|omega| dt bound). 0.5 rad keeps explicit Euler's
   /// amplification per step on an oscillator (sqrt(1 + (w dt)^2)) under 12 %.
@@ -57,6 +65,10 @@ struct SwingSolverOptions {
   static constexpr double kDefaultDt = 0.0025;      ///< the chapter's step (s)
   static constexpr double kDefaultTolerance = 1e-8;
   static constexpr double kDefaultMaxStep = 0.01;   ///< (s)
+  /// The swing's defaults and ranges for the contract.
+  static const ode::AccuracyLimits kLimits;
+  /// The fixed step in use (s): accuracy.dt_s or kDefaultDt (0 for dp45).
+  double dt() const { return ode::ResolveAccuracy(integrator, accuracy, kLimits).dt_s; }
 };
 
 /// Checks the options against the accuracy contract above.
@@ -68,7 +80,7 @@ struct StepRecord {
   SwingVec y0 = SwingVec::Zero(), y1 = SwingVec::Zero();
   int segment = 0;                  ///< torque segment in force during the step
   bool dense = false;               ///< dp45: the continuous extension below is valid
-  std::array<SwingVec, 5> rcont{};  ///< dp45 continuous-extension coefficients
+  ode::Dp45Dense<SwingVec> continuous{};  ///< dp45 continuous extension
 };
 
 /// Steps one swing forward from the top of the backswing. Holds pointers to the model and the

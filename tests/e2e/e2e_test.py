@@ -192,18 +192,16 @@ class CliAgainstServer(unittest.TestCase):
         self.assertEqual(root.tag, SVG_NS + "svg")
         self.assertGreaterEqual(len(root.findall(".//" + SVG_NS + "polyline")), 1)
 
-    def test_shot_simulate_svg_escapes_ball_ids(self):
-        # Regression: ball ids (any 1-32 characters) once went into <text> unescaped, so an id
-        # like "a&b<c" made the --svg file malformed XML.
-        with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "shot.svg")
+    def test_ball_ids_with_markup_or_controls_are_refused(self):
+        # Ball ids are letters, digits, '.', '_' and '-' only: an id like "a&b<c" (once written
+        # into the SVG unescaped) or one with control characters never reaches a table, a
+        # log or a picture, and the message quotes it short and printable.
+        for bad in ("a&b<c", "x\u202ey", "a" * 40):
             r = cli(self.server.address, "shot", "simulate", "--table", "pool-9ft", "--rack",
-                    "empty", "--ball", "cue@-0.5,0", "--ball", "a&b<c@0,0", "--ball-speed", "2",
-                    "--svg", path)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            root = ET.parse(path).getroot()
-        self.assertEqual(root.tag, SVG_NS + "svg")
-        self.assertIn("a&b<c", ["".join(t.itertext()) for t in root.iter(SVG_NS + "text")])
+                    "empty", "--ball", "cue@-0.5,0", "--ball", bad + "@0,0", "--ball-speed", "2")
+            self.assertEqual(r.returncode, 3, r.stderr)  # INVALID_ARGUMENT
+            self.assertIn("table.balls[1].id", r.stderr)
+            self.assertLess(len(r.stderr), 200, r.stderr)
 
     def test_shot_simulate_csv(self):
         r = cli(self.server.address, "--format", "csv", *STRAIGHT_SHOT)
@@ -376,6 +374,212 @@ class TablesAgainstServer(unittest.TestCase):
             root = ET.parse(path).getroot()
             self.assertEqual(root.tag, SVG_NS + "svg")
             self.assertGreaterEqual(len(root.findall(".//" + SVG_NS + "polyline")), 2)
+
+
+# A 9-ball position after the break (--start in-play) on heavy cloth: the 1 straight in to
+# top_right (35 cm away), the cue ball 30 cm behind it on the same line, the 9 far away. A 3 m/s
+# strike with draw pots the 1 and brings the cue ball back.
+GAME_TABLE = ("--table", "pool-9ft", "--rack", "empty", "--ball", "cue@0.6830,0.3387",
+              "--ball", "1@0.9513,0.4728", "--ball", "9@-0.5,-0.2",
+              "--param", "mu_roll=0.3", "--param", "spin_decel_rps2=100", "--tick-hz", "240")
+POT_THE_ONE = ("--ball-speed", "3", "--phi", "26.565051", "--b", "-0.4")
+GAME_NAMES = {"free", "8ball", "9ball", "10ball", "snooker", "three-cushion"}
+GAME_KEYS = {"name", "frame", "race_to", "frames_won", "to_play", "ball_in_hand", "on", "groups",
+             "scores", "fouls_in_row", "call_required", "push_out_available", "decision",
+             "winner", "result", "shot_clock_deadline_s"}
+VERDICT_KEYS = {"foul", "reason", "points", "turn_passes", "respotted"}
+
+
+class GamesAgainstServer(unittest.TestCase):
+    """The games commands of the CLI against a server that referees (DESIGN.md "Games")."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.server = ServerProcess(SERVER)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.__exit__()
+
+    def run_cli(self, *args):
+        return cli(self.server.address, *args)
+
+    def cli_json(self, *args):
+        r = self.run_cli("--format", "json", *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return json.loads(r.stdout)
+
+    def until_rest(self, table):
+        """Waits for the shot in progress (if any) to end; returns the jsonl snapshots seen."""
+        r = self.run_cli("--format", "jsonl", "table", "watch", table, "--until-rest",
+                         "--from-sequence", "0")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return [json.loads(line) for line in r.stdout.splitlines()]
+
+    def create_game(self, *extra):
+        created = self.cli_json("table", "create", "--game", "9ball", "--start", "in-play",
+                                *GAME_TABLE, *extra)
+        return created, created["seats"][0]["token"], created["seats"][1]["token"]
+
+    def test_info_lists_games_with_variants(self):
+        info = self.cli_json("info")
+        games = {g["name"]: g for g in info["capabilities"]["games"]}
+        self.assertTrue(GAME_NAMES <= set(games), sorted(games))
+        for g in games.values():
+            self.assertIn("default_rack", g)
+            for v in g["variants"]:
+                self.assertTrue({"name", "values", "min", "max", "default_value",
+                                 "description"} <= set(v), v)
+        self.assertIn("target", [v["name"] for v in games["three-cushion"]["variants"]])
+        r = self.run_cli("info")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("games", r.stdout)
+        self.assertIn("three-cushion", r.stdout)
+
+    def test_nine_ball_in_play_call_foul_decide_concede_record(self):
+        created, seat0, seat1 = self.create_game()
+        table, admin = created["table_id"], created["admin_token"]
+        self.assertTrue(admin)
+        self.assertNotIn(admin, (seat0, seat1))
+        game = created["game"]
+        self.assertTrue(set(game) <= GAME_KEYS | {"warned", "breaker", "is_break", "innings",
+                                                  "phase", "free_ball", "shot"}, game)
+        self.assertEqual(game["name"], "9ball")
+        self.assertEqual((game["frame"], game["race_to"], game["to_play"]), (1, 1, 0))
+        self.assertEqual(game["frames_won"], [0, 0])
+        self.assertEqual(game["ball_in_hand"], "none")
+        self.assertEqual(game["on"], ["1"])
+        self.assertFalse(game["push_out_available"])  # in-play: no push-out
+        # Keys that do not apply to 9-ball, or not yet, are absent.
+        for key in ("groups", "scores", "decision", "winner", "shot_clock_deadline_s"):
+            self.assertNotIn(key, game)
+
+        info = self.cli_json("table", "get", table)
+        self.assertEqual(info["game"]["on"], ["1"])
+        self.assertNotIn("last_shot", info)
+        # Nobody sets the turn in a ruled game.
+        r = self.run_cli("table", "turn", table, "--token", seat0, "--seat", "1")
+        self.assertEqual(r.returncode, 9, r.stderr)  # FAILED_PRECONDITION
+
+        # No decision is pending: refused, naming the rule; nothing changes.
+        r = self.run_cli("table", "decide", table, "--token", seat0, "--choice", "accept_table")
+        self.assertEqual(r.returncode, 9, r.stderr)
+        self.assertTrue(r.stderr.startswith("sportsim: FAILED_PRECONDITION: "), r.stderr)
+        self.assertIn("decision", r.stderr)
+        self.assertEqual(r.stdout, "")
+
+        # Shot 1: the 1, called in top_right, goes in; seat 0 plays on, the 9 is on.
+        shot = self.cli_json("table", "shoot", table, "--token", seat0, *POT_THE_ONE,
+                             "--call", "1:top_right")
+        self.assertEqual(shot["shot_id"], 1)
+        snaps = self.until_rest(table)
+        self.assertTrue(any("game" in s for s in snaps if not s["heartbeat"]))
+        info = self.cli_json("table", "get", table)
+        last = info["last_shot"]
+        self.assertEqual(last["call"]["ball"], "1")
+        self.assertEqual(last["call"]["pocket"], "top_right")
+        self.assertEqual(last["pocketed"], ["1"])
+        self.assertTrue(VERDICT_KEYS <= set(last["verdict"]), last["verdict"])
+        self.assertFalse(last["verdict"]["foul"], last["verdict"])
+        self.assertFalse(last["verdict"]["turn_passes"])
+        self.assertEqual(info["game"]["to_play"], 0)
+        self.assertEqual(info["game"]["on"], ["9"])
+        self.assertNotIn("winner", info["game"])
+
+        # Shot 2: straight up the table, touching nothing: a foul, seat 1 has ball in hand.
+        self.cli_json("table", "shoot", table, "--token", seat0, "--ball-speed", "1",
+                      "--phi", "90")
+        snaps = self.until_rest(table)
+        fouls = [e for s in snaps for e in s["events"] if e["kind"] == "foul"]
+        self.assertEqual(len(fouls), 1, [e["kind"] for s in snaps for e in s["events"]])
+        self.assertEqual(fouls[0]["seat"], 0)
+        self.assertTrue(fouls[0]["reason"])
+        info = self.cli_json("table", "get", table)
+        verdict = info["last_shot"]["verdict"]
+        self.assertTrue(verdict["foul"])
+        self.assertTrue(verdict["turn_passes"])
+        self.assertEqual(info["game"]["to_play"], 1)
+        self.assertEqual(info["game"]["ball_in_hand"], "anywhere")
+        r = self.run_cli("table", "get", table)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"seat 1 to play, ball in hand anywhere[^\n]*; last shot: "
+                         r"foul by seat 0 \(%s\)" % verdict["reason"])
+        r = self.run_cli("table", "watch", table, "--until-rest", "--from-sequence", "0")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("foul by seat 0 (%s)" % verdict["reason"], r.stdout)
+
+        # Seat 0 may not play out of turn; seat 1 places the cue ball, then concedes.
+        r = self.run_cli("table", "shoot", table, "--token", seat0, "--ball-speed", "1")
+        self.assertNotEqual(r.returncode, 0)
+        self.cli_json("table", "place", table, "--token", seat1, "--ball", "cue@0,0.3")
+        conceded = self.cli_json("table", "concede", table, "--token", seat1)
+        self.assertEqual(conceded["game"]["winner"], 0)
+        self.assertEqual(conceded["game"]["result"], "conceded")
+        info = self.cli_json("table", "get", table)
+        self.assertEqual(info["game"]["winner"], 0)
+
+        # The record: every action, in order; the seeds once the match has ended.
+        record = self.cli_json("table", "record", table)
+        self.assertEqual(record["table_id"], table)
+        self.assertTrue(record["ended"])
+        self.assertEqual(record["create"]["game"]["name"], "9ball")
+        kinds = [a["kind"] for a in record["actions"]]
+        self.assertEqual(kinds, ["SHOOT", "SHOOT", "PLACE", "CONCEDE"])
+        first = record["actions"][0]
+        self.assertEqual((first["seat"], first["shot_id"]), (0, 1))
+        self.assertEqual(first["call"]["ball"], "1")
+        self.assertIn("seed", first)
+        self.assertFalse(first["verdict"]["foul"])
+        self.assertTrue(record["actions"][1]["verdict"]["foul"])
+        self.assertEqual(record["actions"][2]["place"]["id"], "cue")
+        r = self.run_cli("table", "record", table)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        lines = [line for line in r.stdout.splitlines() if line.startswith("tick ")]
+        self.assertEqual(len(lines), 4, r.stdout)
+        self.assertIn("called 1 in top_right", lines[0])
+        self.assertIn("conceded", lines[3])
+
+    def test_admin_concedes_for_a_seat(self):
+        created, seat0, _ = self.create_game("--race-to", "2")
+        table, admin = created["table_id"], created["admin_token"]
+        self.assertEqual(created["game"]["race_to"], 2)
+        r = self.run_cli("table", "concede", table, "--token", admin, "--seat", "0")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        game = self.cli_json("table", "get", table)["game"]
+        self.assertEqual(game["frames_won"], [0, 1])
+        # A seat's token is not the admin's: it cannot delete a ruled table.
+        r = self.run_cli("table", "delete", table, "--token", seat0)
+        self.assertEqual(r.returncode, 7, r.stderr)  # PERMISSION_DENIED
+        self.cli_json("table", "delete", table, "--token", admin)
+
+    def test_games_usage_errors(self):
+        for args, message in (
+                (("table", "create", "--game", "9ball", "--call", "1:top_left"),
+                 "--call applies to table shoot only"),
+                (("table", "shoot", "t-x", "--token", "x", "--ball-speed", "1", "--call",
+                  "1:top_left", "--safety"), "--call BALL:POCKET or --safety"),
+                (("table", "shoot", "t-x", "--token", "x", "--ball-speed", "1", "--call", "1"),
+                 "--call must be BALL:POCKET"),
+                (("shot", "simulate", "--ball-speed", "1", "--rule", "target=10"),
+                 "--rule applies to table create only"),
+                (("table", "create", "--game", "9ball", "--rule", "target"),
+                 "--rule must be NAME=VALUE"),
+                (("table", "create", "--game", "9ball", "--start", "late"),
+                 "--start must be break or in-play"),
+                (("table", "decide", "t-x", "--token", "x"), "--choice"),
+                (("table", "get", "t-x", "--choice", "a"), "--choice applies to table decide"),
+        ):
+            r = self.run_cli(*args)
+            self.assertEqual(r.returncode, 64, (args, r.stderr))
+            self.assertTrue(r.stderr.startswith("sportsim: usage: "), r.stderr)
+            self.assertIn(message, r.stderr)
+
+    def test_unknown_game_and_rule_are_invalid_argument(self):
+        r = self.run_cli("table", "create", "--game", "croquet")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        r = self.run_cli("table", "create", "--game", "9ball", "--rule", "no_such_rule=1")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("no_such_rule", r.stderr)
 
 
 SAMPLE_KEYS = ("t_s", "theta_deg", "alpha_deg", "beta_deg", "phi_deg", "clubhead_speed_mps")

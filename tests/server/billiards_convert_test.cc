@@ -57,7 +57,7 @@ TEST(BilliardsConvertTest, DragWithoutAnEngineNamedRunsStepped) {
   absl::StatusOr<ShotJob> job = ShotJobFromProto(r);
   ASSERT_TRUE(job.ok()) << job.status();
   EXPECT_EQ(job->solver.engine, b::Engine::kStepped);
-  EXPECT_EQ(job->solver.disabled & b::kEffectDrag, 0u);
+  EXPECT_NE(job->solver.effects & b::kEffectEnableDrag, 0u);
   r.mutable_solver()->set_engine(v1::ENGINE_STEPPED);
   ASSERT_TRUE(ShotJobFromProto(r).ok());
 }
@@ -80,7 +80,7 @@ TEST(BilliardsConvertTest, DefaultsArePool9ftWith8BallRack) {
   EXPECT_EQ(job->solver.integrator, b::Integrator::kRk4);
   EXPECT_EQ(job->solver.dt_s, 1.0 / 960.0);
   EXPECT_TRUE(job->solver.ccd);
-  EXPECT_EQ(job->solver.disabled, static_cast<uint32_t>(b::kEffectDrag));  // drag off by default
+  EXPECT_EQ(job->solver.effects, 0u);  // default physics: drag off
   EXPECT_EQ(job->solver.max_events, 200000);
   // Run defaults.
   EXPECT_EQ(job->shot.max_time_s, 600.0);
@@ -199,7 +199,9 @@ TEST(BilliardsConvertTest, CarriesSolverAndRunOptions) {
   EXPECT_EQ(job->solver.integrator, b::Integrator::kSemiImplicitEuler);
   EXPECT_EQ(job->solver.dt_s, 0.002);
   EXPECT_FALSE(job->solver.ccd);
-  EXPECT_EQ(job->solver.disabled, static_cast<uint32_t>(b::kEffectCushions | b::kEffectPockets));
+  EXPECT_EQ(job->solver.effects, static_cast<uint32_t>(b::kEffectDisableCushions |
+                                                      b::kEffectDisablePockets |
+                                                      b::kEffectEnableDrag));
   EXPECT_EQ(job->solver.max_events, 1000);
   EXPECT_DOUBLE_EQ(job->shot.sample_interval_s, 0.01);
   EXPECT_EQ(job->shot.max_time_s, 5.0);

@@ -97,7 +97,7 @@ TEST(MetricsTest, ScrapeShowsWorldsRpcsRejectionsAndTicks) {
     v1::StartSwingResponse out;
     ASSERT_TRUE(swing->StartSwing(&ctx, r, &out).ok());
   }
-  for (int i = 0; i < 300 && (*app)->sessions().stats().swinging > 0; ++i) {
+  for (int i = 0; i < 300 && (*app)->sessions().stats().running > 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 

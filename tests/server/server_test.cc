@@ -346,8 +346,8 @@ TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
   ASSERT_TRUE(stub->SimulateFlight(Ctx().get(), req, &resp).ok());
   absl::StatusOr<FlightJob> job = FlightJobFromProto(req);
   ASSERT_TRUE(job.ok());
-  absl::StatusOr<swing::FlightResult> direct =
-      swing::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+  absl::StatusOr<golf::FlightResult> direct =
+      golf::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
   ASSERT_TRUE(direct.ok());
   v1::SimulateFlightResponse expected;
   FlightResultToProto(*direct, resp.cpu_s(), &expected);
@@ -382,9 +382,9 @@ TEST_F(ServerTest, SimulateSwingLaunchesAndFliesTheBallFromItsImpact) {
   EXPECT_EQ(ball.clubhead_speed_mps(), resp.impact().clubhead_speed_ground_mps());
   EXPECT_EQ(ball.attack_angle_deg(), resp.impact().clubhead_direction_deg());
 
-  absl::StatusOr<swing::ClubSpec> club = swing::ClubPreset("7-iron");
+  absl::StatusOr<golf::ClubSpec> club = golf::ClubPreset("7-iron");
   ASSERT_TRUE(club.ok());
-  absl::StatusOr<swing::ImpactResult> hit = swing::SimulateImpact(
+  absl::StatusOr<golf::ImpactResult> hit = golf::SimulateImpact(
       {.clubhead_speed_mps = ball.clubhead_speed_mps(),
        .attack_angle_deg = ball.attack_angle_deg(),
        .face_angle_deg = 2},
@@ -403,8 +403,8 @@ TEST_F(ServerTest, SimulateSwingLaunchesAndFliesTheBallFromItsImpact) {
   flight.set_sample_interval_s(0.05);
   absl::StatusOr<FlightJob> job = FlightJobFromProto(flight);
   ASSERT_TRUE(job.ok()) << job.status();
-  absl::StatusOr<swing::FlightResult> direct =
-      swing::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+  absl::StatusOr<golf::FlightResult> direct =
+      golf::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
   ASSERT_TRUE(direct.ok());
   v1::SimulateFlightResponse expected;
   FlightResultToProto(*direct, ball.flight().cpu_s(), &expected);

@@ -303,7 +303,7 @@ TEST_F(SessionsTest, CreateValidatesEachFieldAndDefaultsTheRest) {
   r = v1::CreateSessionRequest();
   r.set_profile(static_cast<v1::RealismProfile>(99));
   expect_bad(r, "profile");
-  EXPECT_EQ(reg_.stats().sessions, 0);
+  EXPECT_EQ(reg_.stats().worlds, 0);
   absl::StatusOr<v1::ListSessionsResponse> list = reg_.List(v1::ListSessionsRequest());
   ASSERT_TRUE(list.ok()) << list.status();
   EXPECT_EQ(list->total(), 0u);
@@ -317,7 +317,7 @@ TEST_F(SessionsTest, CreateValidatesEachFieldAndDefaultsTheRest) {
   ASSERT_EQ(s->seats_size(), 1);
   EXPECT_FALSE(s->token().empty());
   EXPECT_EQ(s->token(), s->seats(0).token());
-  EXPECT_EQ(reg_.stats().sessions, 1);
+  EXPECT_EQ(reg_.stats().worlds, 1);
   const v1::SessionInfo info = Info(s->session_id());
   EXPECT_EQ(info.phase(), v1::SWING_PHASE_ADDRESS);
   EXPECT_EQ(info.integrator(), "rk4");
@@ -471,19 +471,19 @@ TEST_F(SessionsTest, ImpactEventCarriesTheLaunchedBallAndItsFlight) {
   v1::CreateSessionRequest bad;
   bad.mutable_ball()->set_club("driver");
   bad.mutable_ball()->set_face_angle_deg(std::nan(""));
-  const int before = reg_.stats().sessions;
+  const int before = reg_.stats().worlds;
   absl::StatusOr<v1::CreateSessionResponse> refused = reg_.Create(bad);
   ASSERT_FALSE(refused.ok());
   EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(refused.status().message(), HasSubstr("ball."));
-  EXPECT_EQ(reg_.stats().sessions, before);
+  EXPECT_EQ(reg_.stats().worlds, before);
   // Fine flight samples would make each IMPACT event (kept for resumes) hundreds of kB.
   bad.mutable_ball()->set_face_angle_deg(0);
   bad.mutable_ball()->set_sample_interval_s(0.001);
   refused = reg_.Create(bad);
   ASSERT_FALSE(refused.ok());
   EXPECT_THAT(refused.status().message(), HasSubstr("ball.sample_interval_s"));
-  EXPECT_EQ(reg_.stats().sessions, before);
+  EXPECT_EQ(reg_.stats().worlds, before);
 }
 
 // Driven torques (100, -10) then (100, 0) from t = 0.1 s are the chapter's program: with rk4 at
@@ -635,7 +635,7 @@ TEST_F(SessionsTest, CommandsTheSwingNeverReachesAreRefusedNotDropped) {
   }
   EXPECT_EQ(reg_.stats().commands_refused, 3);
   EXPECT_EQ(reg_.stats().commands, 0);
-  EXPECT_EQ(reg_.stats().swinging, 0);
+  EXPECT_EQ(reg_.stats().running, 0);
 }
 
 // With apply_late, a command whose tick was already simulated is applied at the next tick and
@@ -702,7 +702,7 @@ TEST_F(SessionsTest, RealisticProfileRefusesInhumanSwingsAndArcadeAllowsThem) {
   EXPECT_EQ(after.phase(), v1::SWING_PHASE_ADDRESS);
   EXPECT_EQ(after.sequence(), before.sequence());
   EXPECT_EQ(after.swings(), 0u);
-  EXPECT_EQ(reg_.stats().swinging, 0);
+  EXPECT_EQ(reg_.stats().running, 0);
 
   const v1::CreateSessionResponse arcade = CreateArcade();
   EXPECT_EQ(arcade.profile(), "arcade");
@@ -763,7 +763,7 @@ TEST_F(SessionsTest, WrongTokensUnknownIdsAndBusySessionsAreRefused) {
   EXPECT_EQ(info.phase(), v1::SWING_PHASE_ADDRESS);
   EXPECT_EQ(info.swings(), 0u);
   EXPECT_EQ(info.watchers(), 0u);
-  EXPECT_EQ(reg_.stats().sessions, 1);
+  EXPECT_EQ(reg_.stats().worlds, 1);
 
   start = StartReq(s);
   start.set_stop(v1::SWING_STOP_DURATION);
@@ -778,7 +778,7 @@ TEST_F(SessionsTest, WrongTokensUnknownIdsAndBusySessionsAreRefused) {
   EXPECT_EQ(info.phase(), v1::SWING_PHASE_SWINGING);
   EXPECT_EQ(info.swings(), 1u);
   EXPECT_EQ(info.watchers(), 0u) << "a refused DriveSwing left its stream registered";
-  EXPECT_EQ(reg_.stats().swinging, 1);
+  EXPECT_EQ(reg_.stats().running, 1);
 
   // Any seat's token acts on the session: seat 1 ends the swing.
   reset = ResetReq(s);
@@ -787,7 +787,7 @@ TEST_F(SessionsTest, WrongTokensUnknownIdsAndBusySessionsAreRefused) {
   info = Info(id);
   EXPECT_EQ(info.phase(), v1::SWING_PHASE_ADDRESS);
   EXPECT_EQ(info.last_end_reason(), "reset");
-  EXPECT_EQ(reg_.stats().swinging, 0);
+  EXPECT_EQ(reg_.stats().running, 0);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -820,7 +820,7 @@ TEST_F(SessionsTest, ResetMidSwingEndsItAtANewAddressPosition) {
   EXPECT_EQ(info.state().alpha_deg(), 0.0);
   EXPECT_NEAR(info.state().theta_deg(), 120.0, 1e-12);
   EXPECT_NEAR(info.state().beta_deg(), 120.0, 1e-12);  // beta0 unchanged
-  EXPECT_EQ(reg_.stats().swinging, 0);
+  EXPECT_EQ(reg_.stats().running, 0);
 
   ASSERT_TRUE(WaitFor([&] { return !EventsOf(sink.got(), v1::SWING_EVENT_RESET).empty(); }));
   const std::vector<v1::SwingSnapshot> got = sink.got();
@@ -997,8 +997,8 @@ TEST_F(SessionsTest, DeleteEndsEveryStreamWithNotFoundAfterALastSnapshot) {
   EXPECT_TRUE(got.back().has_state());
 
   const SessionStats st = reg_.stats();
-  EXPECT_EQ(st.sessions, 0);
-  EXPECT_EQ(st.swinging, 0);
+  EXPECT_EQ(st.worlds, 0);
+  EXPECT_EQ(st.running, 0);
   EXPECT_EQ(st.watchers, 0);
   for (const v1::CreateSessionResponse* s : {&rest, &moving}) {
     EXPECT_EQ(reg_.Get(GetReq(s->session_id())).status().code(), absl::StatusCode::kNotFound);

@@ -21,10 +21,10 @@ TEST(SwingConvertTest, EmptyRequestIsTheChapterSwing) {
   const swing::SwingParams d;
   EXPECT_EQ(job->model.params().arm_length_m, d.arm_length_m);
   EXPECT_EQ(job->model.params().gamma_rad, d.gamma_rad);
-  EXPECT_EQ(job->model.disabled(), 0u);
+  EXPECT_EQ(job->model.effects(), 0u);
   EXPECT_EQ(job->program.breakpoints(), std::vector<double>{0.1});
   EXPECT_EQ(job->solver.integrator, swing::SwingIntegrator::kRk4);
-  EXPECT_FALSE(job->solver.dt_s.has_value());
+  EXPECT_FALSE(job->solver.accuracy.dt_s.has_value());
   EXPECT_EQ(job->run.stop, swing::SwingStop::kImpact);
   EXPECT_EQ(job->run.duration_s, 2.0);
   EXPECT_EQ(job->run.sample_stride, 1);  // 800 steps: under the automatic limit
@@ -49,9 +49,9 @@ TEST(SwingConvertTest, CarriesEveryField) {
   ASSERT_TRUE(job.ok()) << job.status();
   EXPECT_DOUBLE_EQ(job->model.params().gamma_rad, DegToRad(120));
   EXPECT_EQ(job->model.params().club_length_m, 1.0);
-  EXPECT_EQ(job->model.disabled(), swing::kSwingGravity | swing::kSwingWristTorque);
+  EXPECT_EQ(job->model.effects(), swing::kSwingDisableGravity | swing::kSwingDisableWristTorque);
   EXPECT_EQ(job->solver.integrator, swing::SwingIntegrator::kBook);
-  EXPECT_EQ(*job->solver.dt_s, 0.001);
+  EXPECT_EQ(*job->solver.accuracy.dt_s, 0.001);
   EXPECT_EQ(job->run.stop, swing::SwingStop::kDuration);
   EXPECT_EQ(job->run.duration_s, 0.5);
   EXPECT_NEAR(job->program.At(1, 0.15).q_alpha, 40.0, 1e-12);  // ramp 10 -> 50 over 0.2 s
@@ -110,13 +110,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadRequest{"dt_too_big", [](auto* r) { r->mutable_solver()->set_dt_s(1.0); },
                    "solver.dt_s must be finite and in [1e-06, 0.1] s"},
         BadRequest{"tol_on_fixed", [](auto* r) { r->mutable_solver()->set_tolerance(1e-6); },
-                   "solver.tolerance applies to dp45 only"},
+                   "solver.tolerance applies only to dp45"},
         BadRequest{"dt_on_dp45",
                    [](auto* r) {
                      r->mutable_solver()->set_integrator(v1::SWING_INTEGRATOR_DP45);
                      r->mutable_solver()->set_dt_s(0.001);
                    },
-                   "solver.dt_s applies to fixed-step integrators"},
+                   "solver.dt_s does not apply to dp45"},
         BadRequest{"unknown_integrator",
                    [](auto* r) {
                      // An enum value from a newer client: set through reflection, as on the wire.
@@ -178,8 +178,8 @@ TEST(FlightConvertTest, DefaultsAreIsaSeaLevelStillAirRk4) {
   EXPECT_EQ(job->atmosphere.temperature_c, 15.0);
   EXPECT_EQ(job->atmosphere.pressure_pa, 101325.0);
   EXPECT_EQ(job->wind.speed_mps, 0.0);
-  EXPECT_EQ(job->options.disabled, 0u);
-  EXPECT_EQ(job->options.dt_s, 1e-3);
+  EXPECT_EQ(job->options.effects, 0u);
+  EXPECT_FALSE(job->options.accuracy.dt_s.has_value());  // the default, 1e-3 s
 }
 
 TEST(FlightConvertTest, CarriesWindEffectsAndAtmosphere) {
@@ -193,15 +193,15 @@ TEST(FlightConvertTest, CarriesWindEffectsAndAtmosphere) {
   absl::StatusOr<FlightJob> job = FlightJobFromProto(r);
   ASSERT_TRUE(job.ok()) << job.status();
   EXPECT_EQ(job->wind.toward_deg, 180.0);
-  EXPECT_EQ(job->wind.profile, swing::WindProfile::kLogarithmic);
+  EXPECT_EQ(job->wind.profile, golf::WindProfile::kLogarithmic);
   EXPECT_EQ(job->atmosphere.altitude_m, 1600.0);
-  EXPECT_EQ(job->options.disabled, swing::kFlightDisableSpinDecay);
+  EXPECT_EQ(job->options.effects, golf::kFlightDisableSpinDecay);
   EXPECT_EQ(job->options.sample_interval_s, 0.05);
-  EXPECT_EQ(job->options.aero.fit, swing::AeroFit::kFergusonMcNallyMcPhee2022);  // unset
+  EXPECT_EQ(job->options.aero.fit, golf::AeroFit::kFergusonMcNallyMcPhee2022);  // unset
   r.set_aero_fit(v1::AERO_FIT_NATHAN);
   job = FlightJobFromProto(r);
   ASSERT_TRUE(job.ok()) << job.status();
-  EXPECT_EQ(job->options.aero.fit, swing::AeroFit::kNathan);
+  EXPECT_EQ(job->options.aero.fit, golf::AeroFit::kNathan);
 }
 
 TEST(FlightConvertTest, RejectsBadInputNamingTheField) {

@@ -95,8 +95,8 @@ void ExpectSameBalls(const google::protobuf::RepeatedPtrField<v1::BallState>& go
 
 class TablesTest : public ::testing::Test {
  protected:
-  TableRegistry reg_{TableLimits{.max_tables = 8, .max_watchers_per_table = 4, .event_log = 64,
-                                 .watcher_backlog = 32}};
+  TableRegistry reg_{TableLimits{.world = {.max_worlds = 8, .max_watchers = 4, .event_log = 64,
+                                 .watcher_backlog = 32}}};
   // Registers `sink` as a watcher (bound, so it detaches when destroyed) and sends the first
   // snapshot; null (and a test failure) if the registry refuses.
   std::shared_ptr<Watcher> Attach(FakeSink& sink, const v1::WatchTableRequest& w) {
@@ -597,9 +597,9 @@ TEST_F(TablesTest, TheSameShotGivesTheSameBitsOnManyTablesAtOnce) {
     if (first.empty()) first = bits;
     EXPECT_EQ(bits, first);
   }
-  const TableStats s = reg_.stats();
+  const WorldStats s = reg_.stats();
   EXPECT_GT(s.ticks, 0);
-  EXPECT_EQ(s.moving, 0);
+  EXPECT_EQ(s.running, 0);
 }
 
 TEST_F(TablesTest, SeatNamesAloneSetTheSeats) {

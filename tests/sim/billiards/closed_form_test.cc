@@ -113,9 +113,9 @@ TableModel MakeModel(std::string_view preset,
   return ValueOrDie(TableModel::Create(std::move(spec)));
 }
 
-SolverOptions Solver(Integrator integrator, uint32_t disabled = 0) {
+SolverOptions Solver(Integrator integrator, uint32_t effects = 0) {
   return {.engine = Engine::kStepped, .integrator = integrator, .dt_s = kDt,
-          .disabled = disabled | kEffectDrag};
+          .effects = effects};
 }
 
 // A ball on the cloth with its motion state derived from v and w.
@@ -195,8 +195,8 @@ class ClosedFormTest : public ::testing::TestWithParam<Scheme> {
   bool event() const { return GetParam().engine == Engine::kEvent; }
   // The event engine is exact like rk4, so it shares rk4's scheme error (none).
   Integrator integrator() const { return GetParam().integrator; }
-  SolverOptions Options(uint32_t disabled = 0) const {
-    SolverOptions o = Solver(integrator(), disabled);
+  SolverOptions Options(uint32_t effects = 0) const {
+    SolverOptions o = Solver(integrator(), effects);
     o.engine = GetParam().engine;
     return o;
   }
@@ -319,7 +319,7 @@ TEST(CueStrikeTest, SpeedRatioAndSpinsMatchTheClosedForm) {
       if (std::hypot(a, b) > model.params().miscue_limit) continue;
       SCOPED_TRACE(testing::Message() << "a = " << a << ", b = " << b);
       const CueStrike strike{.speed_mps = 3.0, .phi_rad = 0.0, .a = a, .b = b};
-      const StrikeOutcome out = ValueOrDie(ComputeStrike(model, kEffectSquirt, strike));
+      const StrikeOutcome out = ValueOrDie(ComputeStrike(model, kEffectDisableSquirt, strike));
       const double v = out.v.head<2>().norm();
       EXPECT_NEAR(v, ExpectedBallSpeed(model, 3.0, a, b), kArithRel * v);
       EXPECT_NEAR(out.v.y(), 0.0, kArithRel * v);  // squirt off: along the heading (+x)
@@ -388,7 +388,7 @@ TEST(CueStrikeTest, SquirtAngleAndDirection) {
     EXPECT_LT(a * v.dot(right), 0.0) << "squirt must push the ball away from the english side";
     // Squirt off: along the cue.
     const StrikeOutcome off = ValueOrDie(
-        ComputeStrike(model, kEffectSquirt, {.speed_mps = 2.0, .phi_rad = phi, .a = a}));
+        ComputeStrike(model, kEffectDisableSquirt, {.speed_mps = 2.0, .phi_rad = phi, .a = a}));
     EXPECT_EQ(off.squirt_rad, 0.0);
     EXPECT_NEAR(AngleFromTo(forward, off.v.head<2>()), 0.0, kArithRel);
   }
@@ -512,7 +512,7 @@ TEST_P(ClosedFormTest, StunCutNinetyDegreeRuleAndRestitutionCorrection) {
       const double alpha = DegToRad(alpha_deg);
       const TableState start = CutShot(model, alpha, 0.2, {2.0, 0.0, 0.0});
       std::vector<Event> events;
-      AdvanceTo(model, Options(kEffectBallFriction), start, 0.3, &events);
+      AdvanceTo(model, Options(kEffectDisableBallFriction), start, 0.3, &events);
       const Event* hit = FindBallBall(events, 0, 1);
       ASSERT_NE(hit, nullptr);
       const Eigen::Vector2d n(std::cos(alpha), -std::sin(alpha));
@@ -547,7 +547,7 @@ TEST_P(ClosedFormTest, RollingCueBallThirtyDegreeRule) {
     const TableState start = CutShot(model, alpha, 0.3, v, RollingSpin(v, radius));
     ASSERT_EQ(start.balls[0].state, MotionState::kRolling);
     std::vector<Event> events;
-    AdvanceTo(model, Options(kEffectBallFriction), start, 1.0, &events);
+    AdvanceTo(model, Options(kEffectDisableBallFriction), start, 1.0, &events);
     const Event* hit = FindBallBall(events, 0, 1);
     ASSERT_NE(hit, nullptr);
     const Event* rolls_again =
@@ -631,7 +631,7 @@ TEST_P(ClosedFormTest, SlideToRollLosesTwoSeventhsOfTheEnergy) {
     // Without rolling resistance the energy is constant once the ball rolls.
     const double t_slide = 2.0 * v0 / (7.0 * p.mu_slide * p.gravity_mps2);
     std::vector<Event> events;
-    const TableState end = AdvanceTo(model, Options(kEffectRollingResistance),
+    const TableState end = AdvanceTo(model, Options(kEffectDisableRollingResistance),
                                      start, 2.0 * t_slide, &events);
     ASSERT_EQ(end.balls[0].state, MotionState::kRolling);
     EXPECT_NEAR(KineticEnergy(model, end.balls[0]), 5.0 / 7.0 * e0, kEnergyRel * e0)
@@ -662,7 +662,7 @@ TEST_P(ClosedFormTest, BallBallCollisionsConserveMomentum) {
         MakeBall(model, "a", c1 - t_contact * v1.head<2>(), v1, RollingSpin(v1, radius)),
         MakeBall(model, "b", c2 - t_contact * v2.head<2>(), v2, RollingSpin(v2, radius))}};
     std::vector<Event> events;
-    AdvanceTo(model, Options(kEffectRollingResistance | kEffectSpinDecay), start,
+    AdvanceTo(model, Options(kEffectDisableRollingResistance | kEffectDisableSpinDecay), start,
               t_contact + 0.01, &events);
     const Event* hit = FindBallBall(events, 0, 1);
     ASSERT_NE(hit, nullptr) << "trial " << trial;
@@ -695,7 +695,7 @@ TEST(CollisionEnergyTest, NoCollisionAddsEnergy) {
       Ball b = MakeBall(model, "b", 2.0 * radius * n, Horizontal(random_vec(4.0).head<2>()),
                         random_vec(300.0));
       const double before = KineticEnergy(model, a) + KineticEnergy(model, b);
-      const uint32_t disabled = trial % 2 == 1 ? static_cast<uint32_t>(kEffectBallFriction) : 0u;
+      const uint32_t disabled = trial % 2 == 1 ? static_cast<uint32_t>(kEffectDisableBallFriction) : 0u;
       if (CollideBalls(model, disabled, &a, &b)) {
         const double after = KineticEnergy(model, a) + KineticEnergy(model, b);
         EXPECT_LE(after, before * (1.0 + kEnergyRel)) << "ball-ball, e = " << e << ", trial "
@@ -808,7 +808,7 @@ TEST_P(ClosedFormTest, MirrorCushionKeepsAngleAndSpeed) {
         const TableState start{.balls = {
             MakeBall(model, "cue", t.contact - 0.25 * v_in, v, RollingSpin(v, radius))}};
         std::vector<Event> events;
-        AdvanceTo(model, Options(kEffectRollingResistance | kEffectSpinDecay),
+        AdvanceTo(model, Options(kEffectDisableRollingResistance | kEffectDisableSpinDecay),
                   start, 0.26, &events);
         const Event* bounce = nullptr;
         for (const Event& e : events) {

@@ -120,7 +120,7 @@ TEST(SteppedEngineTest, InvariantsOverRandomShotsOnEveryPreset) {
                              .b = 0.6 * (unit(rng) - 0.5)};
       const SolverOptions o{.engine = Engine::kStepped,
                             .integrator = static_cast<Integrator>(i % 3), .dt_s = 1.0 / 480.0};
-      ASSERT_TRUE(ApplyStrike(m, o.disabled, strike, s.Find("cue"), &s).ok());
+      ASSERT_TRUE(ApplyStrike(m, o.effects, strike, s.Find("cue"), &s).ok());
       // Unbounded runs can roll far: stop them after 20 s.
       absl::StatusOr<ShotResult> out =
           SimulateShot(m, o, s, {.max_time_s = preset == "unbounded" ? 20.0 : 600.0,
@@ -174,7 +174,7 @@ TEST(SteppedEngineTest, SameShotTwiceIsBitIdentical) {
     ASSERT_TRUE(balls.ok());
     TableState s{.balls = *balls};
     const SolverOptions o{.engine = Engine::kStepped, .integrator = integ};
-    ASSERT_TRUE(ApplyStrike(m, o.disabled, {.speed_mps = 8.0, .phi_rad = 0.01, .a = 0.1},
+    ASSERT_TRUE(ApplyStrike(m, o.effects, {.speed_mps = 8.0, .phi_rad = 0.01, .a = 0.1},
                             s.Find("cue"), &s)
                     .ok());
     absl::StatusOr<ShotResult> one = SimulateShot(m, o, s, {});
@@ -196,7 +196,7 @@ TEST(SteppedEngineTest, ChunkedAdvanceMatchesOneAdvanceAndRestingBallsDoNotMove)
   const TableModel m = Model("pool-9ft");
   TableState s{.balls = {BallAt("cue", -0.8, 0.0, m), BallAt("1", 0.9, 0.5, m)}};
   const SolverOptions o{.engine = Engine::kStepped, .integrator = Integrator::kSemiImplicitEuler, .dt_s = 1.0 / 960.0};
-  ASSERT_TRUE(ApplyStrike(m, o.disabled, {.speed_mps = 3.0, .phi_rad = DegToRad(-20.0), .b = 0.3},
+  ASSERT_TRUE(ApplyStrike(m, o.effects, {.speed_mps = 3.0, .phi_rad = DegToRad(-20.0), .b = 0.3},
                           0, &s)
                   .ok());
   const Eigen::Vector3d parked = s.balls[1].r;
@@ -247,7 +247,7 @@ TEST(SteppedEngineTest, NewtonsCradleOfFrozenBalls) {
   s.balls[0].v = Eigen::Vector3d(1.0, 0, 0);
   s.balls[0].r.x() = -d;  // touching: the cascade runs at t = 0
   const SolverOptions o{.engine = Engine::kStepped,
-                        .disabled = kEffectDrag | kEffectBallFriction};
+                        .effects = kEffectDisableBallFriction};
   std::vector<Event> ev;
   ASSERT_TRUE(Advance(m, o, 0.6, &s, &ev).ok());
   EXPECT_EQ(Count(ev, EventKind::kBallBall), 4);
@@ -284,7 +284,7 @@ TEST(BothEnginesTest, CushionsOffLetBallsLeaveTheTable) {
     TableState t = s;
     std::vector<Event> ev;
     ASSERT_TRUE(
-        Advance(m, {.engine = engine, .disabled = kEffectDrag | kEffectCushions}, 2.0, &t, &ev)
+        Advance(m, {.engine = engine, .effects = kEffectDisableCushions}, 2.0, &t, &ev)
             .ok());
     EXPECT_EQ(t.balls[0].state, MotionState::kPocketed) << EngineName(engine);
     EXPECT_EQ(t.balls[0].pocket, -1);
@@ -340,13 +340,13 @@ TEST(SteppedEngineTest, DragOnARollingBallMatchesItsClosedFormAndTheEventEngineR
   const double a = p.mu_roll * p.gravity_mps2, b = 5.0 / 7.0 * k;
   const double expected = std::log(1 + b * v0 * v0 / a) / (2 * b);
   absl::StatusOr<ShotResult> plain = SimulateShot(m, {}, s, {});
-  absl::StatusOr<ShotResult> drag = SimulateShot(m, {.engine = Engine::kStepped, .dt_s = 1e-3, .disabled = 0}, s, {});
+  absl::StatusOr<ShotResult> drag = SimulateShot(m, {.engine = Engine::kStepped, .dt_s = 1e-3, .effects = kEffectEnableDrag}, s, {});
   ASSERT_TRUE(plain.ok() && drag.ok());
   // rk4 at 1 ms on a smooth law: far below 1e-6 m; the stop is found by re-predicting until
   // the remaining time is under 1e-9 s.
   EXPECT_NEAR(drag->final_state.balls[0].r.x(), expected, 1e-6);
   EXPECT_NEAR(plain->final_state.balls[0].r.x(), v0 * v0 / (2 * a), 1e-9);
-  const absl::Status st = ValidateSolverOptions({.engine = Engine::kEvent, .disabled = 0});
+  const absl::Status st = ValidateSolverOptions({.engine = Engine::kEvent, .effects = kEffectEnableDrag});
   EXPECT_EQ(st.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(st.message(), HasSubstr("drag"));
 }

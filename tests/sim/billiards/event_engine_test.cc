@@ -117,7 +117,7 @@ double LargestCushionPenetration(const TableModel& m, const TableState& s) {
 TEST(EventEngineTest, SteppedEngineConvergesToItAtItsIntegratorsOrder) {
   const TableModel m = Model("pool-9ft");
   TableState s{.balls = {BallAt("cue", -0.6, 0.0, m), BallAt("1", 0.0, m.radius(), m)}};
-  ASSERT_TRUE(ApplyStrike(m, kEffectDrag, {.speed_mps = 2.5, .ball_speed = true, .b = 0.2}, 0, &s)
+  ASSERT_TRUE(ApplyStrike(m, 0, {.speed_mps = 2.5, .ball_speed = true, .b = 0.2}, 0, &s)
                   .ok());
   constexpr double kT = 1.2;
   std::vector<Event> ev;
@@ -187,7 +187,7 @@ TEST(EventEngineTest, StraightDrawShotComesBackOnTheLine) {
   const TableModel m = Model("unbounded");  // no rail to send the object ball back
   TableState s{.balls = {BallAt("cue", -0.6, 0.0, m), BallAt("1", 0.3, 0.0, m)}};
   ASSERT_TRUE(
-      ApplyStrike(m, kEffectDrag, {.speed_mps = 3.0, .ball_speed = true, .b = -0.4}, 0, &s).ok());
+      ApplyStrike(m, 0, {.speed_mps = 3.0, .ball_speed = true, .b = -0.4}, 0, &s).ok());
   absl::StatusOr<ShotResult> out = SimulateShot(m, kEvent, s, {});
   ASSERT_TRUE(out.ok()) << out.status();
   EXPECT_EQ(Count(out->events, EventKind::kBallBall), 1);
@@ -268,7 +268,7 @@ TEST(EventEngineTest, BallFrozenToACushion) {
   const double y = 0.5 * m.spec().width_m - m.cushion_contact_distance();
   for (const double angle_deg : {0.0, 1.0, 5.0}) {
     TableState s{.balls = {BallAt("cue", -0.5, y, m)}};
-    ASSERT_TRUE(ApplyStrike(m, kEffectDrag,
+    ASSERT_TRUE(ApplyStrike(m, 0,
                             {.speed_mps = 2.0, .ball_speed = true,
                              .phi_rad = DegToRad(angle_deg), .a = 0.3, .b = 0.3},
                             0, &s)
@@ -303,7 +303,7 @@ TEST_P(DrivenIntoAFrozenCluster, EndsWithoutACascade) {
   const double x = -0.6;  // away from the side pocket
   TableState s{.balls = {BallAt("cue", x, y - 3 * d - 0.002, m), BallAt("1", x, y - 2 * d, m),
                          BallAt("2", x, y - d, m), BallAt("3", x, y, m)}};
-  ASSERT_TRUE(ApplyStrike(m, kEffectDrag,
+  ASSERT_TRUE(ApplyStrike(m, 0,
                           {.speed_mps = 1.0, .ball_speed = true, .phi_rad = kPi / 2, .b = 0.5},
                           0, &s)
                   .ok());
@@ -358,7 +358,7 @@ TEST(EventEngineTest, NewtonsCradle) {
                          BallAt("2", d, 0, m), BallAt("3", 2 * d, 0, m), BallAt("4", 3 * d, 0, m)}};
   std::vector<Event> ev;
   std::unique_ptr<TableSimulation> sim =
-      Sim(m, {.engine = Engine::kEvent, .disabled = kEffectDrag | kEffectBallFriction}, s, &ev);
+      Sim(m, {.engine = Engine::kEvent, .effects = kEffectDisableBallFriction}, s, &ev);
   ASSERT_TRUE(sim->AdvanceTo(0.6, &ev).ok());
   ASSERT_EQ(Count(ev, EventKind::kBallBall), 4);
   for (const Event& e : ev) {
@@ -379,7 +379,7 @@ TEST(EventEngineTest, NewtonsCradle) {
 TEST(EventEngineTest, EightBallBreakIsCleanDeterministicAndPinned) {
   const TableModel m = Model("pool-9ft");
   TableState s{.balls = *MakeRack("8ball", m)};
-  ASSERT_TRUE(ApplyStrike(m, kEffectDrag, {.speed_mps = 8.0, .ball_speed = true}, s.Find("cue"),
+  ASSERT_TRUE(ApplyStrike(m, 0, {.speed_mps = 8.0, .ball_speed = true}, s.Find("cue"),
                           &s)
                   .ok());
   std::vector<Event> ev;
@@ -434,7 +434,7 @@ TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
                              .theta_rad = DegToRad(30.0 * unit(rng)),
                              .a = 0.7 * (unit(rng) - 0.5),
                              .b = 0.7 * (unit(rng) - 0.5)};
-      if (!ApplyStrike(m, kEffectDrag, strike, s.Find("cue"), &s).ok()) continue;  // miscue
+      if (!ApplyStrike(m, 0, strike, s.Find("cue"), &s).ok()) continue;  // miscue
       std::vector<Event> ev;
       std::unique_ptr<TableSimulation> sim = Sim(m, kEvent, s, &ev);
       const double t_max = preset == "unbounded" ? 20.0 : 600.0;
@@ -488,7 +488,7 @@ TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
 TEST(EventEngineTest, ChunkedAdvanceIsBitIdentical) {
   const TableModel m = Model("pool-9ft");
   TableState s{.balls = *MakeRack("9ball", m)};
-  ASSERT_TRUE(ApplyStrike(m, kEffectDrag,
+  ASSERT_TRUE(ApplyStrike(m, 0,
                           {.speed_mps = 7.0, .ball_speed = true, .phi_rad = 0.01, .a = 0.2},
                           s.Find("cue"), &s)
                   .ok());
@@ -516,7 +516,7 @@ TEST(EventEngineTest, ChunkedAdvanceIsBitIdentical) {
 TEST(EventEngineTest, EventCapEndsARunawayWithAClearError) {
   const TableModel m = Model("pool-9ft");
   TableState s{.balls = *MakeRack("8ball", m)};
-  ASSERT_TRUE(ApplyStrike(m, kEffectDrag, {.speed_mps = 8.0, .ball_speed = true}, s.Find("cue"),
+  ASSERT_TRUE(ApplyStrike(m, 0, {.speed_mps = 8.0, .ball_speed = true}, s.Find("cue"),
                           &s)
                   .ok());
   absl::StatusOr<ShotResult> out =

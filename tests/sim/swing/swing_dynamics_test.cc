@@ -59,7 +59,7 @@ TEST(SwingDynamicsTest, GroundSpeedAddsTheShoulderVelocity) {
 // Work-energy theorem: dE/dt = Qa alpha_dot + Qb beta_dot for every state, with gravity and the
 // shoulder's acceleration on (E includes the pseudo-force potential), and with them off.
 TEST(SwingDynamicsTest, EnergyRateEqualsTorquePower) {
-  for (uint32_t disabled : {0u, uint32_t{kSwingGravity | kSwingShoulderAccel}, uint32_t{kSwingShoulderAccel}}) {
+  for (uint32_t disabled : {0u, uint32_t{kSwingDisableGravity | kSwingDisableShoulderAccel}, uint32_t{kSwingDisableShoulderAccel}}) {
     const SwingModel m = *SwingModel::Create(SwingParams{}, disabled);
     for (const Sample& s : RandomSamples(200, 11 + disabled)) {
       const SwingVec f = SwingDerivative(m, s.y, s.q);
@@ -74,7 +74,7 @@ TEST(SwingDynamicsTest, EnergyRateEqualsTorquePower) {
 }
 
 TEST(SwingDynamicsTest, SwitchedOffWristTorqueIsIgnored) {
-  const SwingModel off = *SwingModel::Create(SwingParams{}, kSwingWristTorque);
+  const SwingModel off = *SwingModel::Create(SwingParams{}, kSwingDisableWristTorque);
   const SwingVec y(0.3, 2.0, 4.0, -3.0);
   EXPECT_EQ(SwingAccelerations(off, y, {100, -50}), SwingAccelerations(off, y, {100, 0}));
   const SwingModel on = *SwingModel::Create(SwingParams{});

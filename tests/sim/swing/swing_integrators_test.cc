@@ -39,7 +39,7 @@ class SwingIntegratorTest : public ::testing::TestWithParam<SwingIntegrator> {};
 // this build (book 0.91 J, euler 0.37 J, semi-implicit 1.6 J, rk4 1.5e-5 J, dp45 5.4e-7 J;
 // E0 = 18.24 J), so a scheme that gets worse fails.
 TEST_P(SwingIntegratorTest, ConservesEnergyWithoutTorques) {
-  const SwingModel m = ChapterModel(kSwingShoulderAccel);
+  const SwingModel m = ChapterModel(kSwingDisableShoulderAccel);
   const TorqueProgram free = TorqueProgram::Constant(0, 0);
   const SwingRunOptions run{.stop = SwingStop::kDuration, .duration_s = 0.5};
   absl::StatusOr<SwingRunResult> r = SimulateSwing(m, free, Solver(GetParam(), Nominal(GetParam())), run);
@@ -155,7 +155,7 @@ TEST_P(SwingIntegratorTest, ExtremeTorqueGivesAnAccurateAnswerOrAClearError) {
 // The energy ranking the issue asks for: rk4 and dp45 drift orders of magnitude less than the
 // chapter's scheme at the chapter's step.
 TEST(SwingEnergyRankingTest, HigherOrderSchemesDriftFarLessThanTheBook) {
-  const SwingModel m = ChapterModel(kSwingShoulderAccel);
+  const SwingModel m = ChapterModel(kSwingDisableShoulderAccel);
   const TorqueProgram free = TorqueProgram::Constant(0, 0);
   const SwingRunOptions run{.stop = SwingStop::kDuration, .duration_s = 0.5};
   auto drift = [&](SwingIntegrator i) {
@@ -268,12 +268,14 @@ TEST(SwingStepperTest, FixedStepsLandOnTheSwitchTime) {
 TEST(SwingStepperTest, AccuracyContractIsExplicit) {
   const SwingModel m = ChapterModel();
   const TorqueProgram p = TorqueProgram::Chapter();
-  SwingSolverOptions rk4_with_tol{.integrator = SwingIntegrator::kRk4, .tolerance = 1e-6};
+  SwingSolverOptions rk4_with_tol{.integrator = SwingIntegrator::kRk4,
+                                  .accuracy = {.tolerance = 1e-6}};
   EXPECT_THAT(SwingStepper::Create(&m, &p, rk4_with_tol).status().message(),
-              HasSubstr("tolerance applies to dp45 only"));
-  SwingSolverOptions dp45_with_dt{.integrator = SwingIntegrator::kDp45, .dt_s = 0.001};
+              HasSubstr("tolerance applies only to dp45"));
+  SwingSolverOptions dp45_with_dt{.integrator = SwingIntegrator::kDp45,
+                                  .accuracy = {.dt_s = 0.001}};
   EXPECT_THAT(SwingStepper::Create(&m, &p, dp45_with_dt).status().message(),
-              HasSubstr("dt_s applies to fixed-step integrators"));
+              HasSubstr("dt_s does not apply to dp45"));
   for (double bad : {0.0, -1.0, 1.0, static_cast<double>(NAN), static_cast<double>(INFINITY)}) {
     EXPECT_EQ(SwingStepper::Create(&m, &p, Solver(SwingIntegrator::kRk4, bad)).status().code(),
               absl::StatusCode::kInvalidArgument);
@@ -306,7 +308,7 @@ TEST(SwingSimulationTest, DurationRunContinuesPastImpact) {
 
 TEST(SwingSimulationTest, NoImpactWithoutTorqueEndsAtTheCap) {
   // With no torques and no gravity nothing moves: no impact, and that is not an error.
-  const SwingModel m = ChapterModel(kSwingGravity | kSwingShoulderAccel);
+  const SwingModel m = ChapterModel(kSwingDisableGravity | kSwingDisableShoulderAccel);
   absl::StatusOr<SwingRunResult> r =
       SimulateSwing(m, TorqueProgram::Constant(0, 0), Solver(SwingIntegrator::kRk4, 0.01),
                     {.duration_s = 0.3});
@@ -337,7 +339,8 @@ using testing::Solver;
 // Bounds that keep one request cheap (found in review: an unbounded dp45 run reached 7.9 GB).
 TEST(SwingLimitsTest, AdaptiveRunsStopAtTheStepCap) {
   const SwingModel m = ChapterModel();
-  SwingSolverOptions o{.integrator = SwingIntegrator::kDp45, .tolerance = 1e-8, .max_step_s = 1e-6};
+  SwingSolverOptions o{.integrator = SwingIntegrator::kDp45,
+                       .accuracy = {.tolerance = 1e-8, .max_step_s = 1e-6}};
   absl::StatusOr<SwingRunResult> r = SimulateSwing(
       m, TorqueProgram::Chapter(), o,
       {.stop = SwingStop::kDuration, .duration_s = 10, .sample_interval_s = 0.01});
@@ -354,7 +357,8 @@ TEST(SwingLimitsTest, TooManySamplesAreRefusedBeforeRunning) {
   ASSERT_FALSE(r.ok());
   EXPECT_THAT(r.status().message(), HasSubstr("more than 200000"));
   // dp45's step count is unknown up front: the run stops when it has kept the maximum.
-  SwingSolverOptions fine{.integrator = SwingIntegrator::kDp45, .tolerance = 1e-8, .max_step_s = 1e-5};
+  SwingSolverOptions fine{.integrator = SwingIntegrator::kDp45,
+                          .accuracy = {.tolerance = 1e-8, .max_step_s = 1e-5}};
   absl::StatusOr<SwingRunResult> d = SimulateSwing(
       m, TorqueProgram::Chapter(), fine, {.stop = SwingStop::kDuration, .duration_s = 10});
   ASSERT_FALSE(d.ok());

@@ -20,12 +20,12 @@ TEST(SwingModelTest, ChapterDefaultsAreValid) {
 }
 
 TEST(SwingModelTest, SwitchedOffEffectsZeroTheirTerms) {
-  const SwingModel m = *SwingModel::Create(SwingParams{}, kSwingGravity | kSwingShoulderAccel);
+  const SwingModel m = *SwingModel::Create(SwingParams{}, kSwingDisableGravity | kSwingDisableShoulderAccel);
   EXPECT_EQ(m.g(), 0.0);
   EXPECT_EQ(m.a(), 0.0);
   EXPECT_FALSE(m.gravity_on());
   EXPECT_TRUE(m.wrist_torque_on());
-  EXPECT_FALSE(SwingModel::Create(SwingParams{}, kSwingWristTorque)->wrist_torque_on());
+  EXPECT_FALSE(SwingModel::Create(SwingParams{}, kSwingDisableWristTorque)->wrist_torque_on());
 }
 
 struct BadParam {

@@ -9,17 +9,17 @@
 
 namespace sportsim::swing::testing {
 
-inline SwingModel ChapterModel(uint32_t disabled = 0) {
-  return *SwingModel::Create(SwingParams{}, disabled);
+inline SwingModel ChapterModel(uint32_t effects = 0) {
+  return *SwingModel::Create(SwingParams{}, effects);
 }
 
 /// Solver options for an integrator: a fixed step, or dp45 at a tolerance.
 inline SwingSolverOptions Solver(SwingIntegrator i, double dt_or_tol) {
   SwingSolverOptions o{.integrator = i};
   if (i == SwingIntegrator::kDp45) {
-    o.tolerance = dt_or_tol;
+    o.accuracy.tolerance = dt_or_tol;
   } else {
-    o.dt_s = dt_or_tol;
+    o.accuracy.dt_s = dt_or_tol;
   }
   return o;
 }

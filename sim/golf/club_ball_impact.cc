@@ -1,4 +1,4 @@
-#include "sim/swing/club_ball_impact.h"
+#include "sim/golf/club_ball_impact.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include "absl/status/status.h"
 #include "absl/strings/str_format.h"
 
-namespace sportsim::swing {
+namespace sportsim::golf {
 namespace {
 
 using Eigen::Vector3d;
@@ -150,4 +150,4 @@ absl::StatusOr<ImpactResult> SimulateImpact(const ClubDelivery& delivery,
   return out;
 }
 
-}  // namespace sportsim::swing
+}  // namespace sportsim::golf

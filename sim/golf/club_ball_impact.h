@@ -37,17 +37,17 @@
 // and roll, shaft effective mass (the ISEA 2020 paper cited in golf_ball.h
 // found the rigid model's ball speed is low by an amount equal to adding
 // < 3 g to the head), and the speed dependence of e.
-#ifndef SPORTSIM_SIM_SWING_CLUB_BALL_IMPACT_H_
-#define SPORTSIM_SIM_SWING_CLUB_BALL_IMPACT_H_
+#ifndef SPORTSIM_SIM_GOLF_CLUB_BALL_IMPACT_H_
+#define SPORTSIM_SIM_GOLF_CLUB_BALL_IMPACT_H_
 
 #include <optional>
 
 #include <Eigen/Dense>
 
 #include "absl/status/statusor.h"
-#include "sim/swing/golf_ball.h"
+#include "sim/golf/golf_ball.h"
 
-namespace sportsim::swing {
+namespace sportsim::golf {
 
 /// How the club arrives at the ball (launch-monitor "club data").
 struct ClubDelivery {
@@ -105,6 +105,6 @@ absl::StatusOr<ImpactResult> SimulateImpact(const ClubDelivery& delivery,
                                             const BallSpec& ball,
                                             const ImpactOptions& options = {});
 
-}  // namespace sportsim::swing
+}  // namespace sportsim::golf
 
-#endif  // SPORTSIM_SIM_SWING_CLUB_BALL_IMPACT_H_
+#endif  // SPORTSIM_SIM_GOLF_CLUB_BALL_IMPACT_H_

@@ -1,4 +1,4 @@
-#include "sim/swing/ball_flight.h"
+#include "sim/golf/ball_flight.h"
 
 #include <cmath>
 #include <cstring>
@@ -10,9 +10,9 @@
 #include "absl/status/status.h"
 #include "absl/strings/match.h"
 #include "gtest/gtest.h"
-#include "sim/swing/golf_ball.h"
+#include "sim/golf/golf_ball.h"
 
-namespace sportsim::swing {
+namespace sportsim::golf {
 namespace {
 
 constexpr double kG = 9.80665;  // standard gravity (m/s^2), the default
@@ -59,10 +59,8 @@ FlightOptions WithFit(FlightOptions options, AeroFit fit) {
 FlightOptions Reference() {
   // Dormand-Prince at a tolerance near round-off, small steps: the
   // reference solution the convergence tests compare against.
-  return FlightOptions{.integrator = FlightIntegrator::kDormandPrince45,
-                       .dt_s = 1e-4,
-                       .tolerance = 1e-13,
-                       .max_step_s = 0.01,
+  return FlightOptions{.integrator = ode::Integrator::kDp45,
+                       .accuracy = {.tolerance = 1e-13, .max_step_s = 0.01},
                        .sample_interval_s = 0.0};
 }
 
@@ -83,11 +81,11 @@ TEST(BallFlightVacuum, MatchesProjectileClosedForm) {
   const LaunchConditions launch{.ball_speed_mps = kSpeed,
                                 .launch_angle_deg = kAngleDeg,
                                 .spin_rpm = 3000};
-  for (FlightIntegrator integrator :
-       {FlightIntegrator::kRk4, FlightIntegrator::kDormandPrince45}) {
+  for (ode::Integrator integrator :
+       {ode::Integrator::kRk4, ode::Integrator::kDp45}) {
     FlightOptions o{.integrator = integrator,
-                    .disabled = kFlightDisableDrag | kFlightDisableLift};
-    if (integrator == FlightIntegrator::kDormandPrince45) o.tolerance = 1e-10;
+                    .effects = kFlightDisableDrag | kFlightDisableLift};
+    if (integrator == ode::Integrator::kDp45) o.accuracy.tolerance = 1e-10;
     const FlightResult r = Fly(launch, o);
     EXPECT_NEAR(r.carry_m, range, kVacuumRelTol * range);
     EXPECT_NEAR(r.carry_downrange_m, range, kVacuumRelTol * range);
@@ -111,7 +109,7 @@ TEST(BallFlightVacuum, ElevatedLaunchMatchesClosedForm) {
   const FlightResult r =
       Fly({.ball_speed_mps = kSpeed, .launch_angle_deg = kAngleDeg},
           {.launch_height_m = kHeight,
-           .disabled = kFlightDisableDrag | kFlightDisableLift});
+           .effects = kFlightDisableDrag | kFlightDisableLift});
   EXPECT_NEAR(r.flight_time_s, time, kVacuumRelTol * time);
   EXPECT_NEAR(r.carry_m, range, kVacuumRelTol * range);
   EXPECT_NEAR(r.apex_m, kHeight + vz * vz / (2 * kG), kVacuumRelTol * kHeight);
@@ -123,7 +121,7 @@ TEST(BallFlightSpinDecay, MatchesExponentialClosedForm) {
   // error is ~(dt/tau0)^4 / 120 per unit time, far below this bound.
   constexpr double kSpinRelTol = 1e-10;
   const LaunchConditions launch = PgaTourDriver();
-  const FlightResult r = Fly(launch, {.disabled = kFlightDisableDrag |
+  const FlightResult r = Fly(launch, {.effects = kFlightDisableDrag |
                                                   kFlightDisableLift});
   const double tau = BallSpec{}.radius_m() / (2e-5 * launch.ball_speed_mps);
   EXPECT_NEAR(r.landing_spin_rpm,
@@ -131,7 +129,7 @@ TEST(BallFlightSpinDecay, MatchesExponentialClosedForm) {
               kSpinRelTol * launch.spin_rpm);
 
   const FlightResult off = Fly(
-      launch, {.disabled = kFlightDisableDrag | kFlightDisableLift |
+      launch, {.effects = kFlightDisableDrag | kFlightDisableLift |
                            kFlightDisableSpinDecay});
   EXPECT_EQ(off.landing_spin_rpm, launch.spin_rpm);  // untouched, exactly
 }
@@ -219,7 +217,7 @@ TEST(BallFlightEnergy, DragOnlyNeverIncreasesMechanicalEnergy) {
   const BallSpec ball;
   const FlightResult r =
       Fly(PgaTourDriver(), {.sample_interval_s = 0.01,
-                            .disabled = kFlightDisableLift});
+                            .effects = kFlightDisableLift});
   ASSERT_GT(r.samples.size(), 100u);
   auto energy = [&](const FlightSample& s) {
     return 0.5 * ball.mass_kg * s.speed_mps * s.speed_mps +
@@ -299,7 +297,7 @@ TEST(BallFlightWind, CrosswindAndDisableBit) {
   EXPECT_GT(pushed.lateral_m, 5.0);
   const FlightResult still = Fly(PgaTourDriver(), {});
   const FlightResult off =
-      Fly(PgaTourDriver(), {.disabled = kFlightDisableWind}, crosswind);
+      Fly(PgaTourDriver(), {.effects = kFlightDisableWind}, crosswind);
   EXPECT_EQ(off.carry_m, still.carry_m);
   EXPECT_EQ(off.lateral_m, still.lateral_m);
   EXPECT_EQ(off.flight_time_s, still.flight_time_s);
@@ -331,7 +329,7 @@ TEST(BallFlightWind, LogarithmicProfile) {
   // headwind also lifts more, and the order can go either way.)
   const LaunchConditions punch{.ball_speed_mps = 45, .launch_angle_deg = 12,
                                .spin_rpm = 2500};
-  const FlightOptions drag_only{.disabled = kFlightDisableLift};
+  const FlightOptions drag_only{.effects = kFlightDisableLift};
   const FlightResult log_run = Fly(punch, drag_only, w);
   ASSERT_LT(log_run.apex_m, 10.0);
   Wind uniform = w;
@@ -501,7 +499,7 @@ TEST_P(BallFlightConvergence, Rk4IsFourthOrder) {
   const AeroFit fit = GetParam().fit;
   const FlightResult ref = Fly(launch, WithFit(Reference(), fit));
   const FlightResult fine =
-      Fly(launch, WithFit({.dt_s = 1e-5, .sample_interval_s = 0}, fit));
+      Fly(launch, WithFit({.accuracy = {.dt_s = 1e-5}, .sample_interval_s = 0}, fit));
   ASSERT_NEAR(fine.carry_m, ref.carry_m, kReferenceAgreementM);
 
   // Steps from 100 ms down to 12.5 ms keep the errors (1e-4..1e-11 m) well
@@ -509,7 +507,7 @@ TEST_P(BallFlightConvergence, Rk4IsFourthOrder) {
   std::vector<double> errors;
   for (double dt : {0.1, 0.05, 0.025, 0.0125}) {
     const FlightResult r =
-        Fly(launch, WithFit({.dt_s = dt, .sample_interval_s = 0}, fit));
+        Fly(launch, WithFit({.accuracy = {.dt_s = dt}, .sample_interval_s = 0}, fit));
     errors.push_back(std::abs(r.carry_m - ref.carry_m));
   }
   for (size_t i = 1; i < errors.size(); ++i) {
@@ -530,9 +528,8 @@ TEST_P(BallFlightConvergence, AdaptiveMeetsItsTolerance) {
   int64_t previous_steps = 0;
   for (double tol : {1e-4, 1e-6, 1e-8, 1e-10}) {
     const FlightResult r =
-        Fly(launch, WithFit({.integrator = FlightIntegrator::kDormandPrince45,
-                             .tolerance = tol,
-                             .max_step_s = 1.0,
+        Fly(launch, WithFit({.integrator = ode::Integrator::kDp45,
+                             .accuracy = {.tolerance = tol, .max_step_s = 1.0},
                              .sample_interval_s = 0},
                             fit));
     EXPECT_LE(std::abs(r.carry_m - ref.carry_m), tol * (1 + ref.carry_m))
@@ -569,13 +566,13 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(BallFlightOptions, FixedStepWithToleranceIsInvalid) {
   absl::StatusOr<FlightResult> r = SimulateFlight(
-      BallSpec{}, PgaTourDriver(), {}, {}, {.tolerance = 1e-6});
+      BallSpec{}, PgaTourDriver(), {}, {}, {.accuracy = {.tolerance = 1e-6}});
   ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_TRUE(absl::StrContains(r.status().message(), "tolerance"))
       << r.status().message();
   // And the adaptive scheme without one.
   r = SimulateFlight(BallSpec{}, PgaTourDriver(), {}, {},
-                     {.integrator = FlightIntegrator::kDormandPrince45});
+                     {.integrator = ode::Integrator::kDp45});
   ASSERT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument);
   EXPECT_TRUE(absl::StrContains(r.status().message(), "tolerance"))
       << r.status().message();
@@ -584,7 +581,7 @@ TEST(BallFlightOptions, FixedStepWithToleranceIsInvalid) {
 TEST(BallFlightOptions, UnstableStepStopsWithTime) {
   // C_D = 10 at 120 m/s gives a drag rate ~ 2 K C_D v ~ 46 1/s; dt = 0.1 s
   // puts RK4 far outside its stability interval.
-  FlightOptions o{.dt_s = 0.1};
+  FlightOptions o{.accuracy = {.dt_s = 0.1}};
   o.aero.cd_c0 = 10;
   absl::StatusOr<FlightResult> r = SimulateFlight(
       BallSpec{}, {.ball_speed_mps = 120, .launch_angle_deg = 20}, {}, {}, o);
@@ -605,14 +602,15 @@ TEST(BallFlightOptions, GivesUpAfterMaxFlightTime) {
 // Determinism and validation.
 
 TEST(BallFlightDeterminism, TwoRunsAreBitIdentical) {
-  for (FlightIntegrator integrator :
-       {FlightIntegrator::kRk4, FlightIntegrator::kDormandPrince45}) {
+  for (ode::Integrator integrator :
+       {ode::Integrator::kRk4, ode::Integrator::kDp45}) {
     LaunchConditions launch = PgaTourSevenIron();
     launch.spin_axis_deg = -7;
     const FlightOptions o{
         .integrator = integrator,
-        .tolerance =
-            integrator == FlightIntegrator::kRk4 ? 0.0 : 1e-9,
+        .accuracy = integrator == ode::Integrator::kRk4
+                        ? ode::Accuracy{}
+                        : ode::Accuracy{.tolerance = 1e-9},
         .sample_interval_s = 0.01};
     const Wind w{.speed_mps = 4,
                  .toward_deg = 135,
@@ -669,12 +667,12 @@ TEST(BallFlightValidation, RejectsBadInputsNamingTheField) {
   ExpectInvalid(ok, "relative_humidity", {.relative_humidity = 1.5});
   ExpectInvalid(ok, "temperature_c", {.temperature_c = std::nan("")});
   ExpectInvalid(ok, "speed_mps", {}, {.speed_mps = -1});
-  ExpectInvalid(ok, "dt_s", {}, {}, {.dt_s = 0});
-  ExpectInvalid(ok, "disabled", {}, {}, {.disabled = 1u << 7});
+  ExpectInvalid(ok, "dt_s", {}, {}, {.accuracy = {.dt_s = 0}});
+  ExpectInvalid(ok, "effects", {}, {}, {.effects = 1u << 7});
   ExpectInvalid(ok, "mass_kg", {}, {}, {}, {.mass_kg = 0});
   ExpectInvalid(ok, "diameter_m", {}, {}, {},
                 {.diameter_m = std::numeric_limits<double>::infinity()});
 }
 
 }  // namespace
-}  // namespace sportsim::swing
+}  // namespace sportsim::golf

@@ -1,4 +1,4 @@
-#include "sim/swing/club_ball_impact.h"
+#include "sim/golf/club_ball_impact.h"
 
 #include <cmath>
 #include <limits>
@@ -7,10 +7,10 @@
 #include "absl/status/status.h"
 #include "absl/strings/match.h"
 #include "gtest/gtest.h"
-#include "sim/swing/ball_flight.h"
-#include "sim/swing/golf_ball.h"
+#include "sim/golf/ball_flight.h"
+#include "sim/golf/golf_ball.h"
 
-namespace sportsim::swing {
+namespace sportsim::golf {
 namespace {
 
 // The impact is a handful of closed-form expressions evaluated once: every
@@ -285,4 +285,4 @@ TEST(ClubBallImpactValidation, RejectsBadInputsNamingTheField) {
 }
 
 }  // namespace
-}  // namespace sportsim::swing
+}  // namespace sportsim::golf

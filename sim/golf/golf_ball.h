@@ -32,7 +32,7 @@
 //   9-iron 42, pitching wedge 46, sand wedge 56 degrees (loft charts at
 //   tellmemoregolf.com and golfah.com agree on these values).
 //
-// Conventions used by every golf type in sportsim::swing (a right-handed
+// Conventions used by every golf type in sportsim::golf (a right-handed
 // golfer, seen from behind the ball looking at the target):
 // - World frame: x downrange along the target line, y to the LEFT, z up
 //   (right-handed). All angles below are converted to this frame.
@@ -40,8 +40,8 @@
 //   positive to the RIGHT of the target line (launch-monitor convention).
 // - Spin axis tilt is positive when the ball curves to the right (fade or
 //   slice for a right-handed golfer); sidespin carries the same sign.
-#ifndef SPORTSIM_SIM_SWING_GOLF_BALL_H_
-#define SPORTSIM_SIM_SWING_GOLF_BALL_H_
+#ifndef SPORTSIM_SIM_GOLF_GOLF_BALL_H_
+#define SPORTSIM_SIM_GOLF_GOLF_BALL_H_
 
 #include <array>
 #include <cmath>
@@ -54,7 +54,7 @@
 #include "absl/status/statusor.h"
 #include "absl/strings/str_format.h"
 
-namespace sportsim::swing {
+namespace sportsim::golf {
 
 inline constexpr double kRpmToRadPerS = 2.0 * std::numbers::pi / 60.0;
 inline constexpr double kDegToRad = std::numbers::pi / 180.0;
@@ -227,6 +227,6 @@ inline absl::StatusOr<ClubSpec> ClubPreset(std::string_view name) {
       "club_preset must be one of %s; got \"%s\"", names, name));
 }
 
-}  // namespace sportsim::swing
+}  // namespace sportsim::golf
 
-#endif  // SPORTSIM_SIM_SWING_GOLF_BALL_H_
+#endif  // SPORTSIM_SIM_GOLF_GOLF_BALL_H_
