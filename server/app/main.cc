@@ -44,6 +44,15 @@ ABSL_FLAG(int, max_catchup_ticks, 12,
           "A table further behind its clock than this slips (runs slower than real time) instead "
           "of racing to catch up");
 ABSL_FLAG(int, event_log, 512, "Events each table keeps for watchers resuming with from_sequence");
+ABSL_FLAG(int, sim_workers, 0,
+          "Threads computing simulations (SimulateShot, SimulateSwing, SimulateFlight, "
+          "StartSwing), apart from gRPC's and the tick workers, at a lower priority; 0: one "
+          "per core");
+ABSL_FLAG(int, max_queued_simulations, 64,
+          "Simulations that may wait for a worker; more are refused with RESOURCE_EXHAUSTED");
+ABSL_FLAG(absl::Duration, max_request_cpu, absl::Seconds(10),
+          "CPU time one simulation request may use before it is stopped with "
+          "RESOURCE_EXHAUSTED, in [10ms, 1h]");
 ABSL_FLAG(double, clock_rate, 1.0,
           "Table and session time per wall-clock time, in [0.01, 1000]: 1 is real time; more "
           "plays every world faster (tests, bots, replays). Outcomes depend on ticks only");
@@ -100,6 +109,14 @@ int main(int argc, char** argv) {
               << "\n";
     return 2;
   }
+  config.work.workers = absl::GetFlag(FLAGS_sim_workers);
+  config.work.max_queued = absl::GetFlag(FLAGS_max_queued_simulations);
+  config.work.cpu_budget = absl::GetFlag(FLAGS_max_request_cpu);
+  if (config.work.cpu_budget < absl::Milliseconds(10) || config.work.cpu_budget > absl::Hours(1)) {
+    std::cerr << "sportsim-server: --max_request_cpu must be in [10ms, 1h], got "
+              << absl::FormatDuration(config.work.cpu_budget) << "\n";
+    return 2;
+  }
   config.tables.world.clock_rate = clock_rate;
   config.sessions.world.clock_rate = clock_rate;
   config.sessions.world.watcher_backlog = config.tables.world.watcher_backlog;
@@ -110,6 +127,8 @@ int main(int argc, char** argv) {
                 {"max_tables", config.tables.world.max_worlds, 1, 1000000},
                 {"max_watchers_per_table", config.tables.world.max_watchers, 1, 100000},
                 {"tick_workers", config.tick_workers, 0, 256},
+                {"sim_workers", config.work.workers, 0, 256},
+                {"max_queued_simulations", config.work.max_queued, 0, 100000},
                 {"max_catchup_ticks", config.tables.world.max_catchup_ticks, 1, 100000},
                 {"event_log", config.tables.world.event_log, 1, 10000000},
                 {"watcher_backlog", config.tables.world.watcher_backlog, 1, 10000000},

@@ -1,5 +1,7 @@
 #include "server/app/metrics.h"
 
+#include "server/world/work_pool.h"
+
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/support/server_interceptor.h>
 #include <prometheus/collectable.h>
@@ -132,8 +134,8 @@ void AddHistogram(MetricFamily* f, const LatencyHistogram& h,
 class Collector final : public prometheus::Collectable {
  public:
   Collector(TableRegistry* tables, SessionRegistry* sessions, TickScheduler* scheduler,
-            RpcCounters* rpcs)
-      : tables_(tables), sessions_(sessions), scheduler_(scheduler), rpcs_(rpcs) {}
+            WorkPool* pool, RpcCounters* rpcs)
+      : tables_(tables), sessions_(sessions), scheduler_(scheduler), pool_(pool), rpcs_(rpcs) {}
 
   std::vector<MetricFamily> Collect() const override {
     // One row per kind of world: a new kind is one more entry here.
@@ -206,6 +208,33 @@ class Collector final : public prometheus::Collectable {
       Add(&f, static_cast<double>(sessions.commands));
       out.push_back(std::move(f));
     }
+    {
+      MetricFamily f = Family("sportsim_simulations_queued",
+                              "Simulations waiting for a worker of the simulation pool",
+                              MetricType::Gauge);
+      Add(&f, pool_->queued());
+      out.push_back(std::move(f));
+    }
+    {
+      MetricFamily f = Family("sportsim_simulations_running",
+                              "Simulations running on the simulation pool", MetricType::Gauge);
+      Add(&f, pool_->running());
+      out.push_back(std::move(f));
+    }
+    {
+      MetricFamily f = Family("sportsim_simulations_refused_total",
+                              "Simulations refused because the queue was full",
+                              MetricType::Counter);
+      Add(&f, static_cast<double>(pool_->refused()));
+      out.push_back(std::move(f));
+    }
+    {
+      MetricFamily f = Family("sportsim_simulations_over_budget_total",
+                              "Simulations stopped by their CPU budget (--max_request_cpu)",
+                              MetricType::Counter);
+      Add(&f, static_cast<double>(pool_->budget_exhausted()));
+      out.push_back(std::move(f));
+    }
     // Rejected inputs: RPCs ending with a caller-error code, and refused DriveSwing commands.
     std::map<int, int64_t> rejected;
     MetricFamily rpcs = Family("sportsim_rpcs_total", "RPCs finished, by method and status code",
@@ -235,6 +264,7 @@ class Collector final : public prometheus::Collectable {
   TableRegistry* const tables_;
   SessionRegistry* const sessions_;
   TickScheduler* const scheduler_;
+  WorkPool* const pool_;
   RpcCounters* const rpcs_;
 };
 
@@ -247,9 +277,9 @@ std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface> MakeRpcCo
 
 absl::StatusOr<std::unique_ptr<MetricsEndpoint>> MetricsEndpoint::Start(
     const std::string& listen, TableRegistry* tables, SessionRegistry* sessions,
-    TickScheduler* scheduler, RpcCounters* rpcs) {
+    TickScheduler* scheduler, WorkPool* pool, RpcCounters* rpcs) {
   std::unique_ptr<MetricsEndpoint> e(new MetricsEndpoint());
-  auto collector = std::make_shared<Collector>(tables, sessions, scheduler, rpcs);
+  auto collector = std::make_shared<Collector>(tables, sessions, scheduler, pool, rpcs);
   try {
     // One civetweb thread: a scrape every few seconds needs no more.
     e->exposer_ = std::make_unique<prometheus::Exposer>(listen, /*num_threads=*/1);

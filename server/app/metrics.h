@@ -28,6 +28,7 @@ namespace sportsim::server {
 class TableRegistry;
 class SessionRegistry;
 class TickScheduler;
+class WorkPool;
 
 /// RPCs finished, by full method name and gRPC status code. Thread safe.
 class RpcCounters {
@@ -53,6 +54,7 @@ class MetricsEndpoint {
                                                                 TableRegistry* tables,
                                                                 SessionRegistry* sessions,
                                                                 TickScheduler* scheduler,
+                                                                WorkPool* pool,
                                                                 RpcCounters* rpcs);
   ~MetricsEndpoint();
   int port() const { return port_; }

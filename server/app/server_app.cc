@@ -125,14 +125,17 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->scheduler_ = std::make_unique<TickScheduler>(config.tick_workers);
   app->tables_ = std::make_unique<TableRegistry>(config.tables, app->scheduler_.get());
   app->sessions_ = std::make_unique<SessionRegistry>(config.sessions, app->scheduler_.get());
-  app->services_.push_back(MakeSwingService(app->sessions_.get()));
-  app->services_.push_back(MakeBilliardsService(app->tables_.get()));
+  app->pool_ = std::make_unique<WorkPool>(config.work);
+  app->services_.push_back(MakeSwingService(app->sessions_.get(), app->pool_.get()));
+  app->services_.push_back(MakeBilliardsService(app->tables_.get(), app->pool_.get(),
+                                                config.max_send_message_bytes));
 
   app->rpc_counters_ = std::make_unique<RpcCounters>();
   if (!config.metrics_listen.empty()) {
     absl::StatusOr<std::unique_ptr<MetricsEndpoint>> metrics =
         MetricsEndpoint::Start(config.metrics_listen, app->tables_.get(), app->sessions_.get(),
-                               app->scheduler_.get(), app->rpc_counters_.get());
+                               app->scheduler_.get(), app->pool_.get(),
+                               app->rpc_counters_.get());
     if (!metrics.ok()) return metrics.status();
     app->metrics_ = *std::move(metrics);
   }
@@ -188,7 +191,11 @@ void ServerApp::Shutdown(absl::Duration grace) {
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
   sessions_->Shutdown(absl::UnavailableError("the server is shutting down"));
   scheduler_->Stop();
-  server_->Shutdown(absl::ToChronoTime(absl::Now() + grace));
+  // Queued simulations end now (UNAVAILABLE); running ones get the grace, then stop at their
+  // next poll. Then the calls still open get what is left of the grace.
+  const absl::Time deadline = absl::Now() + grace;
+  pool_->Stop(grace);
+  server_->Shutdown(absl::ToChronoTime(std::max(deadline, absl::Now())));
 }
 
 void ServerApp::Wait() {

@@ -12,6 +12,7 @@
 #include "absl/time/time.h"
 #include "server/app/metrics.h"
 #include "server/swing/session_world.h"
+#include "server/world/work_pool.h"
 #include "server/billiards/table_world.h"
 
 namespace grpc {
@@ -37,6 +38,8 @@ struct ServerConfig {
   absl::Duration min_client_ping_interval = absl::Seconds(10);   ///< --min_client_ping_interval
   TableLimits tables;
   SessionLimits sessions;
+  WorkLimits work;  ///< the simulation pool (--sim_workers, --max_queued_simulations,
+                    ///< --max_request_cpu)
 };
 
 /// host and port of a listen address.
@@ -61,6 +64,7 @@ class ServerApp {
   int metrics_port() const;
   TableRegistry& tables() { return *tables_; }
   SessionRegistry& sessions() { return *sessions_; }
+  WorkPool& pool() { return *pool_; }
   std::string address() const;
 
   /// Marks health NOT_SERVING, ends every WatchTable stream (UNAVAILABLE after a last
@@ -73,6 +77,7 @@ class ServerApp {
  private:
   ServerApp() = default;
   std::unique_ptr<TickScheduler> scheduler_;  // stopped before the registries go
+  std::unique_ptr<WorkPool> pool_;            // outlives the services that queue on it
   std::unique_ptr<TableRegistry> tables_;  // the registries outlive the services
   std::unique_ptr<SessionRegistry> sessions_;
   std::unique_ptr<RpcCounters> rpc_counters_;   // outlives the gRPC server (its interceptor)

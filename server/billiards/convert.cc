@@ -48,6 +48,28 @@ void ShotSummaryToProto(const ShotSummary& s, v1::ShotSummary* out) {
   }
 }
 
+absl::Status BoundShotWork(int64_t max_reply_bytes, ShotJob* job) {
+  // A sample costs each ball about 17 bytes on the wire (two packed doubles and a state) and
+  // about 17 in memory; an event about 100 on the wire. Half the reply for each, at most.
+  constexpr int64_t kSampleBallBytes = 40;
+  constexpr int64_t kEventBytes = 100;
+  const int64_t balls = std::max<int64_t>(1, static_cast<int64_t>(job->table.state.balls.size()));
+  const int64_t samples = std::max<int64_t>(1, max_reply_bytes / 2 / (balls * kSampleBallBytes));
+  job->shot.max_samples = std::min(job->shot.max_samples, samples);
+  const int64_t events = std::max<int64_t>(1, max_reply_bytes / 2 / kEventBytes);
+  job->solver.max_events = std::min(job->solver.max_events, events);
+  if (job->solver.engine == b::Engine::kStepped) {
+    const double steps = job->shot.max_time_s / job->solver.dt_s;
+    if (steps > 1e9) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "max_time_s / solver.dt_s is %.3g steps, above the stepped engine's 1e9: lower "
+          "max_time_s or raise dt_s",
+          steps));
+    }
+  }
+  return absl::OkStatus();
+}
+
 absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
   const std::string preset = setup.preset().empty() ? "pool-9ft" : setup.preset();
   absl::StatusOr<b::TableSpec> spec = b::MakeTablePreset(preset);

@@ -49,6 +49,12 @@ struct ShotJob {
 };
 absl::StatusOr<ShotJob> ShotJobFromProto(const v1::SimulateShotRequest& request);
 
+/// Bounds what a shot may build before it runs: its samples (samples x balls) and events stay
+/// within `max_reply_bytes` (the run stops with RESOURCE_EXHAUSTED, naming sample_rate_hz,
+/// when it would pass them), and the stepped engine's step count is refused above 1e9 steps
+/// (INVALID_ARGUMENT naming max_time_s and solver.dt_s).
+absl::Status BoundShotWork(int64_t max_reply_bytes, ShotJob* job);
+
 v1::MotionState MotionStateToProto(billiards::MotionState s);
 void BallToProto(const billiards::TableModel& model, const billiards::Ball& ball,
                  v1::BallState* out);

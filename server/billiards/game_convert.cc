@@ -83,7 +83,13 @@ std::string GameRack(g::GameKind game) {
   return "";
 }
 
-g::ShotCall ShotCallFromProto(const v1::ShotCall& call) {
+absl::StatusOr<g::ShotCall> ShotCallFromProto(const v1::ShotCall& call) {
+  for (const auto& [field, value] : {std::pair{"call.ball", &call.ball()},
+                                     std::pair{"call.pocket", &call.pocket()},
+                                     std::pair{"call.nominate", &call.nominate()}}) {
+    if (value->empty()) continue;
+    if (absl::Status s = CheckId(field, *value); !s.ok()) return s;
+  }
   return g::ShotCall{.ball = call.ball(),
                      .pocket = call.pocket(),
                      .safety = call.safety(),

@@ -29,7 +29,8 @@ absl::StatusOr<GameSetup> GameSetupFromProto(const v1::GameConfig& game);
 std::string GamePreset(games::GameKind game);
 std::string GameRack(games::GameKind game);
 
-games::ShotCall ShotCallFromProto(const v1::ShotCall& call);
+/// ShootRequest.call, its ids checked (letters, digits, '.', '_', '-'; at most 32 each).
+absl::StatusOr<games::ShotCall> ShotCallFromProto(const v1::ShotCall& call);
 void ShotCallToProto(const games::ShotCall& call, v1::ShotCall* out);
 void VerdictToProto(const games::Verdict& verdict, v1::Verdict* out);
 /// The game state as the API shows it; `deadline_s`: the shot clock's (table time), if armed.

@@ -229,6 +229,42 @@ void EndShot(TableHost& host, Table& t, int64_t end_tick, const TableKind::End& 
   }
 }
 
+// The shot clock ran out at its tick (t.tick): the game's penalty.
+void ExpireShotClock(Table& t, std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  const int seat = t.game.to_play;
+  t.clock_deadline.reset();
+  b::TableState balls = t.rest;
+  absl::StatusOr<games::Judgement> j =
+      t.game_referee->ShotClockExpired(t.rules, *t.model, t.game, &balls);
+  if (!j.ok()) {
+    RefreshGameView(t);
+    return;
+  }
+  t.rest = std::move(balls);
+  t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShotClock, .tick = t.tick,
+                                .seat = seat, .verdict = j->verdict});
+  ApplyJudgement(t, *std::move(j), t.tick, t.current.shot_id, fresh);
+}
+
+// A seat's call at rest comes after the shot clock's tick: the penalty takes effect first, at
+// its own tick, published; the call is then refused (the turn has changed). Decided by ticks
+// only, never by when a worker got to the table.
+absl::Status ShotClockFirst(TableHost& host, Table& t, Table::Pump* pump)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  if (!Ruled(t) || t.sim != nullptr || !t.clock_deadline.has_value()) return absl::OkStatus();
+  const int64_t deadline = *t.clock_deadline;
+  if (t.ClockTick(SteadyClock::now()) < deadline) return absl::OkStatus();
+  t.tick = std::max(t.tick, deadline);
+  ++t.sequence;
+  std::vector<EventPtr> fresh;
+  ExpireShotClock(t, &fresh);
+  host.CountEvents(fresh.size());
+  t.OfferAll(t.MakeFrame(t.tick, false), fresh, pump);
+  host.ScheduleRest(t);
+  return absl::FailedPreconditionError(absl::StrFormat(
+      "shot clock: it ran out at table time %.3f s, before this call", t.WorldTime(deadline)));
+}
+
 }  // namespace
 
 bool TableKind::Running(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS { return t.sim != nullptr; }
@@ -265,19 +301,7 @@ std::optional<int64_t> TableKind::RestDeadline(const Table& t) ABSL_NO_THREAD_SA
 }
 
 void TableKind::AtRestDeadline(TableHost& /*host*/, Table& t, std::vector<EventPtr>* fresh) {
-  const int seat = t.game.to_play;
-  t.clock_deadline.reset();
-  b::TableState balls = t.rest;
-  absl::StatusOr<games::Judgement> j =
-      t.game_referee->ShotClockExpired(t.rules, *t.model, t.game, &balls);
-  if (!j.ok()) {
-    RefreshGameView(t);
-    return;
-  }
-  t.rest = std::move(balls);
-  t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShotClock, .tick = t.tick,
-                                .seat = seat, .verdict = j->verdict});
-  ApplyJudgement(t, *std::move(j), t.tick, t.current.shot_id, fresh);
+  ExpireShotClock(t, fresh);
 }
 
 std::shared_ptr<const Frame> TableKind::MakeFrame(const Table& t, int64_t k, bool heartbeat,
@@ -574,7 +598,9 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
     ++t.sequence;
     std::vector<EventPtr> fresh;
     if (t.sim != nullptr) {
-      EndShot(host_, t, tick, TableKind::End{.error = "the table was reset during the shot"},
+      // A ruled game restarts: the interrupted shot is void, not judged.
+      EndShot(host_, t, tick,
+              TableKind::End{.error = "the table was reset during the shot", .voided = Ruled(t)},
               &fresh);
       host_.AfterRunEndedByCall(t);
     }
@@ -620,6 +646,7 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
           t.current.shot_id));
     }
     if (Ruled(t)) {
+      if (absl::Status s = ShotClockFirst(host_, t, &pump); !s.ok()) return s;
       // Ball in hand only: the seat that has it, its own cue ball, inside the zone.
       if (absl::Status s = t.game_referee->CheckPlacement(
               t.rules, *t.model, t.game, seat, t.rest, p.id(), Eigen::Vector2d(p.x_m(), p.y_m()));
@@ -689,7 +716,9 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     seat = *acting;
     v1::ShootResponse response;
     b::CueStrike struck = *strike;
-    const games::ShotCall call = ShotCallFromProto(request.call());
+    absl::StatusOr<games::ShotCall> parsed = ShotCallFromProto(request.call());
+    if (!parsed.ok()) return parsed.status();
+    const games::ShotCall call = *std::move(parsed);
     if (Ruled(t)) {
       if (request.has_next_seat()) {
         return absl::FailedPreconditionError(
@@ -706,6 +735,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
             "no shooter chooses");
       }
       if (t.sim == nullptr) {
+        if (absl::Status s = ShotClockFirst(host_, t, &pump); !s.ok()) return s;
         if (absl::Status s =
                 t.game_referee->CheckShot(t.rules, *t.model, t.game, seat, call, t.rest);
             !s.ok()) {
@@ -888,6 +918,11 @@ absl::StatusOr<v1::ConcedeResponse> TableRegistry::Concede(const v1::ConcedeRequ
       return absl::FailedPreconditionError(
           "balls are still moving: concede when they are at rest");
     }
+    // A shot clock that ran out before the concession takes effect first.
+    (void)ShotClockFirst(host_, t, &pump);
+    if (t.game.match_over()) {
+      return absl::FailedPreconditionError("the match is over: nothing left to concede");
+    }
     b::TableState balls = t.rest;
     absl::StatusOr<games::Judgement> j =
         t.game_referee->Concede(t.rules, *t.model, t.game, conceding, &balls);
@@ -919,7 +954,11 @@ absl::StatusOr<v1::MatchRecord> TableRegistry::GetMatchRecord(
   const bool ended = t.game.match_over();
   out.set_ended(ended);
   out.mutable_create()->ParseFromString(t.create_request);
-  if (ended) out.mutable_create()->mutable_game()->set_seed(t.seed);
+  if (ended) {
+    out.mutable_create()->mutable_game()->set_seed(t.seed);
+  } else {
+    out.mutable_create()->mutable_game()->clear_seed();  // even one its creator chose
+  }
   for (const MatchEntry& m : t.record) {
     v1::MatchAction* a = out.add_actions();
     a->set_tick(m.tick);

@@ -3,9 +3,15 @@
 #include <google/protobuf/stubs/common.h>
 #include <grpcpp/grpcpp.h>
 
+#include <chrono>
+#include <optional>
+
+#include "absl/strings/match.h"
+
 #include "server/billiards/convert.h"
 #include "server/billiards/game_convert.h"
 #include "server/rpc/status.h"
+#include "server/world/work_pool.h"
 #include "server/swing/session_world.h"
 #include "server/billiards/table_world.h"
 #include "sim/billiards/shot.h"
@@ -39,6 +45,13 @@ class InfoService final : public v1::Server::CallbackService {
   }
 };
 
+// A call finished at once with `status` (refused before any work).
+grpc::ServerUnaryReactor* Finished(grpc::CallbackServerContext* ctx, const absl::Status& status) {
+  auto* reactor = ctx->DefaultReactor();
+  reactor->Finish(ToGrpcStatus(status));
+  return reactor;
+}
+
 // Unary calls on the registry: the status, or the response.
 template <typename Response, typename Fn>
 grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* ctx, Response* response, Fn fn) {
@@ -46,6 +59,44 @@ grpc::ServerUnaryReactor* Unary(grpc::CallbackServerContext* ctx, Response* resp
   absl::StatusOr<Response> result = fn();
   if (result.ok()) *response = *std::move(result);
   reactor->Finish(ToGrpcStatus(result.status()));
+  return reactor;
+}
+
+// The call's deadline on the steady clock (none when the client set none).
+std::optional<std::chrono::steady_clock::time_point> DeadlineOf(
+    const grpc::CallbackServerContext* ctx) {
+  const std::chrono::system_clock::time_point d = ctx->deadline();
+  if (d >= std::chrono::system_clock::time_point::max() - std::chrono::hours(24 * 365)) {
+    return std::nullopt;
+  }
+  return std::chrono::steady_clock::now() +
+         std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+             d - std::chrono::system_clock::now());
+}
+
+// A unary call computed on the simulation pool: queued (or refused at once when the queue is
+// full), run with a WorkControl that the computation polls, and finished from the worker.
+// `fn(control)` returns the call's status and fills the response. A computation stopped by its
+// control (cancelled, deadline, CPU budget, shutdown) reports why, not "cancelled".
+template <typename Fn>
+grpc::ServerUnaryReactor* Pooled(WorkPool* pool, grpc::CallbackServerContext* ctx, Fn fn) {
+  auto* reactor = ctx->DefaultReactor();
+  absl::Status queued = pool->Submit(
+      [reactor, pool, fn = std::move(fn)](const WorkControl& control) mutable {
+        absl::Status st = control.Check();  // it may have waited past its deadline
+        if (st.ok()) st = fn(control);
+        if (st.code() == absl::StatusCode::kCancelled) {
+          if (absl::Status why = control.Check(); !why.ok()) st = why;
+        }
+        if (st.code() == absl::StatusCode::kResourceExhausted &&
+            absl::StrContains(st.message(), "--max_request_cpu")) {
+          pool->CountBudgetExhausted();
+        }
+        reactor->Finish(ToGrpcStatus(st));
+      },
+      [reactor](const absl::Status& dropped) { reactor->Finish(ToGrpcStatus(dropped)); },
+      [ctx] { return ctx->IsCancelled(); }, DeadlineOf(ctx));
+  if (!queued.ok()) reactor->Finish(ToGrpcStatus(queued));
   return reactor;
 }
 
@@ -176,10 +227,11 @@ class DriveReactor final : public grpc::ServerBidiReactor<v1::DriveSwingRequest,
 
 class SwingService final : public v1::Swing::CallbackService {
  public:
-  explicit SwingService(SessionRegistry* sessions) : sessions_(sessions) {}
+  SwingService(SessionRegistry* sessions, WorkPool* pool) : sessions_(sessions), pool_(pool) {}
 
  private:
   SessionRegistry* const sessions_;
+  WorkPool* const pool_;
 
   grpc::ServerUnaryReactor* CreateSession(grpc::CallbackServerContext* ctx,
                                           const v1::CreateSessionRequest* request,
@@ -207,7 +259,14 @@ class SwingService final : public v1::Swing::CallbackService {
   grpc::ServerUnaryReactor* StartSwing(grpc::CallbackServerContext* ctx,
                                        const v1::StartSwingRequest* request,
                                        v1::StartSwingResponse* response) override {
-    return Unary(ctx, response, [&] { return sessions_->Start(*request); });
+    // StartSwing runs the swing once, off the session's lock, before it starts it: a
+    // simulation like any other.
+    return Pooled(pool_, ctx, [this, request, response](const WorkControl&) -> absl::Status {
+      absl::StatusOr<v1::StartSwingResponse> r = sessions_->Start(*request);
+      if (!r.ok()) return r.status();
+      *response = *std::move(r);
+      return absl::OkStatus();
+    });
   }
   grpc::ServerUnaryReactor* ResetSwing(grpc::CallbackServerContext* ctx,
                                        const v1::ResetSwingRequest* request,
@@ -227,19 +286,20 @@ class SwingService final : public v1::Swing::CallbackService {
   grpc::ServerUnaryReactor* SimulateSwing(grpc::CallbackServerContext* ctx,
                                           const v1::SimulateSwingRequest* request,
                                           v1::SimulateSwingResponse* response) override {
-    auto* reactor = ctx->DefaultReactor();
-    reactor->Finish(ToGrpcStatus(Simulate(*request, response, ctx)));
-    return reactor;
+    // Checked on the call's thread (cheap), computed on the pool.
+    absl::StatusOr<SwingJob> job = SwingJobFromProto(*request);
+    if (!job.ok()) return Finished(ctx, job.status());
+    auto shared = std::make_shared<SwingJob>(*std::move(job));
+    return Pooled(pool_, ctx, [shared, response](const WorkControl& control) {
+      return Simulate(shared.get(), control, response);
+    });
   }
 
-  // A deadline, a client that goes away or a server shutdown past its grace cancels the call;
-  // the run polls that and stops.
-  static absl::Status Simulate(const v1::SimulateSwingRequest& request,
-                               v1::SimulateSwingResponse* response,
-                               grpc::CallbackServerContext* ctx) {
-    absl::StatusOr<SwingJob> job = SwingJobFromProto(request);
-    if (!job.ok()) return job.status();
-    job->run.cancelled = [ctx] { return ctx->IsCancelled(); };
+  // A deadline, a client that goes away, the CPU budget or a server shutdown past its grace
+  // stops the run: it polls its control.
+  static absl::Status Simulate(SwingJob* job, const WorkControl& control,
+                               v1::SimulateSwingResponse* response) {
+    job->run.cancelled = [&control] { return control.ShouldStop(); };
     const double cpu0 = ThreadCpuSeconds();
     absl::StatusOr<swing::SwingRunResult> result =
         swing::SimulateSwing(job->model, job->program, job->solver, job->run);
@@ -253,9 +313,9 @@ class SwingService final : public v1::Swing::CallbackService {
   grpc::ServerUnaryReactor* SimulateFlight(grpc::CallbackServerContext* ctx,
                                            const v1::SimulateFlightRequest* request,
                                            v1::SimulateFlightResponse* response) override {
-    auto* reactor = ctx->DefaultReactor();
-    reactor->Finish(ToGrpcStatus(Fly(*request, response)));
-    return reactor;
+    return Pooled(pool_, ctx, [request, response](const WorkControl&) {
+      return Fly(*request, response);
+    });
   }
 
   static absl::Status Fly(const v1::SimulateFlightRequest& request,
@@ -274,10 +334,13 @@ class SwingService final : public v1::Swing::CallbackService {
 
 class BilliardsService final : public v1::Billiards::CallbackService {
  public:
-  explicit BilliardsService(TableRegistry* tables) : tables_(tables) {}
+  BilliardsService(TableRegistry* tables, WorkPool* pool, int64_t max_reply_bytes)
+      : tables_(tables), pool_(pool), max_reply_bytes_(max_reply_bytes) {}
 
  private:
   TableRegistry* const tables_;
+  WorkPool* const pool_;
+  const int64_t max_reply_bytes_;
 
   grpc::ServerUnaryReactor* CreateTable(grpc::CallbackServerContext* ctx,
                                         const v1::CreateTableRequest* request,
@@ -346,17 +409,22 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   grpc::ServerUnaryReactor* SimulateShot(grpc::CallbackServerContext* ctx,
                                          const v1::SimulateShotRequest* request,
                                          v1::SimulateShotResponse* response) override {
-    auto* reactor = ctx->DefaultReactor();
-    reactor->Finish(ToGrpcStatus(Simulate(*request, response, ctx)));
-    return reactor;
+    // Checked on the call's thread, before any work: the request, and what its reply could
+    // grow to (samples x balls against the reply limit).
+    absl::StatusOr<ShotJob> job = ShotJobFromProto(*request);
+    if (!job.ok()) return Finished(ctx, job.status());
+    if (absl::Status s = BoundShotWork(max_reply_bytes_, &*job); !s.ok()) {
+      return Finished(ctx, s);
+    }
+    auto shared = std::make_shared<ShotJob>(*std::move(job));
+    return Pooled(pool_, ctx, [shared, response](const WorkControl& control) {
+      return Simulate(shared.get(), control, response);
+    });
   }
 
-  static absl::Status Simulate(const v1::SimulateShotRequest& request,
-                               v1::SimulateShotResponse* response,
-                               grpc::CallbackServerContext* ctx) {
-    absl::StatusOr<ShotJob> job = ShotJobFromProto(request);
-    if (!job.ok()) return job.status();
-    job->shot.cancelled = [ctx] { return ctx->IsCancelled(); };
+  static absl::Status Simulate(ShotJob* job, const WorkControl& control,
+                               v1::SimulateShotResponse* response) {
+    job->shot.cancelled = [&control] { return control.ShouldStop(); };
     absl::StatusOr<billiards::ShotResult> result = billiards::SimulateShot(
         job->table.model, job->solver, job->table.state, job->shot);
     if (!result.ok()) return result.status();
@@ -392,11 +460,12 @@ v1::GetInfoResponse MakeServerInfo() {
 }
 
 std::unique_ptr<grpc::Service> MakeInfoService() { return std::make_unique<InfoService>(); }
-std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions) {
-  return std::make_unique<SwingService>(sessions);
+std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkPool* pool) {
+  return std::make_unique<SwingService>(sessions, pool);
 }
-std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables) {
-  return std::make_unique<BilliardsService>(tables);
+std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
+                                                    int64_t max_reply_bytes) {
+  return std::make_unique<BilliardsService>(tables, pool, max_reply_bytes);
 }
 
 }  // namespace sportsim::server

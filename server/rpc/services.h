@@ -1,7 +1,8 @@
 // The gRPC services: thin translation from proto to sim calls and back.
-#ifndef SPORTSIM_SERVER_SERVICES_H_
-#define SPORTSIM_SERVER_SERVICES_H_
+#ifndef SPORTSIM_SERVER_RPC_SERVICES_H_
+#define SPORTSIM_SERVER_RPC_SERVICES_H_
 
+#include <cstdint>
 #include <memory>
 
 #include <grpcpp/impl/codegen/service_type.h>
@@ -12,16 +13,19 @@ namespace sportsim::server {
 
 class SessionRegistry;
 class TableRegistry;
+class WorkPool;
 
 /// The capabilities this build serves (also used by tests).
 v1::GetInfoResponse MakeServerInfo();
 
 std::unique_ptr<grpc::Service> MakeInfoService();
-/// Swing: SimulateSwing, SimulateFlight and the sessions of `sessions` (which must outlive it).
-std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions);
-/// Billiards: SimulateShot and the tables of `tables` (which must outlive the service).
-std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables);
+/// Swing: SimulateSwing, SimulateFlight and the sessions of `sessions`. Simulations (and
+/// StartSwing, whose dry run is one) run on `pool`. Both must outlive the service.
+std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkPool* pool);
+/// Billiards: SimulateShot (on `pool`) and the tables of `tables`. Both must outlive it.
+std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
+                                                    int64_t max_reply_bytes);
 
 }  // namespace sportsim::server
 
-#endif  // SPORTSIM_SERVER_SERVICES_H_
+#endif  // SPORTSIM_SERVER_RPC_SERVICES_H_

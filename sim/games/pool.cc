@@ -223,6 +223,11 @@ absl::Status PoolReferee::CheckShot(const Rules& rules, const TableModel& model,
   if (call.safety && (!call.ball.empty() || !call.pocket.empty())) {
     return absl::InvalidArgumentError("call: a shot is either called or declared a safety");
   }
+  if (call.safety && rules.game == GameKind::kNineBall) {
+    return absl::InvalidArgumentError(
+        "safety: 9-ball has no declared safety (WPA 9-ball calls nothing): a shot that "
+        "pockets nothing passes the turn anyway");
+  }
   if (!call.ball.empty() || !call.pocket.empty()) {
     if (call.ball.empty() || call.pocket.empty()) {
       return absl::InvalidArgumentError("call: name one ball and one pocket (BALL:POCKET)");
