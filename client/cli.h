@@ -72,6 +72,16 @@ int RunTable(const Context& ctx, const std::vector<std::string>& args);
 /// it; nullopt when every one given applies.
 std::optional<std::string> CheckGameFlags(std::string_view command, std::string_view sub);
 
+/// --seats in [1, 16] and --tick-hz in [1, 1000] when given, --seat-names each once: table
+/// and swing create (defined in table_commands.cc).
+std::optional<std::string> CheckSeatFlags();
+/// --page-size in [0, 1000]: table and swing list.
+std::optional<std::string> CheckPageSize();
+
+/// Exit status of `swing drive` when the server refused any of stdin's commands (sysexits'
+/// EX_DATAERR): the swing ran, but not as the input asked.
+inline constexpr int kRefusedCommandsExit = 65;
+
 /// Whether a flag (absl name, with underscores: "race_to") was written on the command line.
 bool FlagGiven(std::string_view name);
 

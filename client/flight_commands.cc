@@ -125,54 +125,118 @@ void PrintCsv(const v1::SimulateFlightResponse& f) {
   }
 }
 
+// A round tick step for a span: 1, 2 or 5 times a power of ten, about `ticks` to the span.
+double NiceStep(double span, int ticks) {
+  const double raw = std::max(span, 1e-9) / ticks;
+  const double p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0}) {
+    if (m * p >= raw) return m * p;
+  }
+  return 10 * p;
+}
+
 // The trajectory as two views sharing the downrange axis: the side view (height over
-// downrange) above the top view (lateral over downrange, + right drawn downward as on a map
-// seen from behind the golfer), each at its own scale so a 30 m apex and a 5 m curve both
-// show, with the carry, apex and landing written under them.
+// downrange) at one scale for both axes, so the flight's shape is true, with a downrange axis
+// in metres and yards and a height axis in metres; under it the top view (lateral over
+// downrange, + right drawn downward as on a map seen from behind the golfer), whose lateral
+// scale is its own (a 5 m curve over 250 m would not show) and is marked on its axis. The
+// carry, apex and landing are written under them.
 std::string FlightSvg(const v1::SimulateFlightResponse& f, const std::string& title) {
-  constexpr double kWidth = 900, kPlotW = 820, kLeft = 50, kSideTop = 50, kSideH = 220;
-  constexpr double kTopTop = 330, kTopH = 160;
+  constexpr double kWidth = 900, kLeft = 70, kRight = 30, kSideTop = 60, kMaxSideH = 360;
+  constexpr double kTopH = 160;
+  constexpr double kPlotW = kWidth - kLeft - kRight;
   double x_max = 1, z_max = 1, y_max = 1;
   for (const v1::FlightSample& s : f.samples()) {
     x_max = std::max(x_max, s.x_m());
     z_max = std::max(z_max, s.z_m());
     y_max = std::max(y_max, std::abs(s.y_m()));
   }
-  const double sx = kPlotW / x_max;
-  const auto px = [&](double x) { return kLeft + x * sx; };
-  const auto side_y = [&](double z) { return kSideTop + kSideH - z * kSideH / z_max; };
+  // One scale (px per metre) for downrange and height.
+  const double scale = std::min(kPlotW / x_max, kMaxSideH / z_max);
+  const double side_h = z_max * scale;
+  const double ground = kSideTop + side_h;
+  const auto px = [&](double x) { return kLeft + x * scale; };
+  const auto side_y = [&](double z) { return ground - z * scale; };
+  const double axis_end = px(x_max);
+  const double yard_axis = ground + 34;
+  const double top_top = yard_axis + 70;
   // Left of the target line (y > 0) is drawn up, right (y < 0) down.
-  const auto top_y = [&](double y) { return kTopTop + kTopH / 2 - y * (kTopH / 2) / y_max; };
+  const auto top_y = [&](double y) { return top_top + kTopH / 2 - y * (kTopH / 2) / y_max; };
+  const double height = top_top + kTopH + 50;
   std::string side, top;
   for (const v1::FlightSample& s : f.samples()) {
     side += absl::StrFormat("%.1f,%.1f ", px(s.x_m()), side_y(s.z_m()));
     top += absl::StrFormat("%.1f,%.1f ", px(s.x_m()), top_y(s.y_m()));
   }
   std::string out = absl::StrFormat(
-      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"560\" "
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
       "font-family=\"sans-serif\" font-size=\"13\">\n"
       "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n"
       "<text x=\"%.0f\" y=\"25\">%s</text>\n",
-      kWidth, kLeft, SvgEscape(title));
-  // Side view: ground line, apex height, trajectory.
+      kWidth, height, kLeft, SvgEscape(title));
   out += absl::StrFormat(
-      "<text x=\"%.0f\" y=\"%.0f\">side view (height %.1f m at the apex)</text>\n"
+      "<text x=\"%.0f\" y=\"%.0f\">side view, same scale across and up (%.1f px/m); apex "
+      "%.1f m</text>\n",
+      kLeft, kSideTop - 12, scale, f.apex_m());
+  // Downrange axis in metres (the ground line) and in yards under it.
+  out += absl::StrFormat(
       "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#6a6\"/>\n"
-      "<polyline points=\"%s\" fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\"/>\n",
-      kLeft, kSideTop - 5, f.apex_m(), px(0), side_y(0), px(x_max), side_y(0), side);
-  // Top view: the target line, trajectory.
+      "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\"/>\n",
+      px(0), ground, axis_end, ground, px(0), yard_axis, axis_end, yard_axis);
+  const double m_step = NiceStep(x_max, 8);
+  for (double x = 0; x <= x_max + 1e-9; x += m_step) {
+    out += absl::StrFormat(
+        "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#6a6\"/>\n"
+        "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"middle\">%g</text>\n",
+        px(x), ground, px(x), ground + 5, px(x), ground + 17, x);
+  }
+  const double yd_max = x_max / kMetresPerYard;
+  const double yd_step = NiceStep(yd_max, 8);
+  for (double yd = 0; yd <= yd_max + 1e-9; yd += yd_step) {
+    const double x = px(yd * kMetresPerYard);
+    out += absl::StrFormat(
+        "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\"/>\n"
+        "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"middle\">%g</text>\n",
+        x, yard_axis, x, yard_axis + 5, x, yard_axis + 17, yd);
+  }
   out += absl::StrFormat(
-      "<text x=\"%.0f\" y=\"%.0f\">top view (lateral scale %.1f m to the edge; right of the "
-      "target line drawn down)</text>\n"
+      "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"end\">m</text>\n"
+      "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"end\">yd</text>\n",
+      kLeft - 8, ground + 17, kLeft - 8, yard_axis + 17);
+  // Height axis, metres.
+  out += absl::StrFormat(
+      "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\"/>\n", px(0),
+      ground, px(0), side_y(z_max));
+  const double z_step = NiceStep(z_max, 4);
+  for (double z = z_step; z <= z_max + 1e-9; z += z_step) {
+    out += absl::StrFormat(
+        "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\"/>\n"
+        "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"end\">%g m</text>\n",
+        px(0) - 5, side_y(z), px(0), side_y(z), px(0) - 8, side_y(z) + 4, z);
+  }
+  out += absl::StrFormat(
+      "<polyline points=\"%s\" fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\"/>\n", side);
+  // Top view: the target line, the lateral scale, the trajectory.
+  out += absl::StrFormat(
+      "<text x=\"%.0f\" y=\"%.0f\">top view (lateral scale stretched: %.1f m to the edge; "
+      "right of the target line drawn down)</text>\n"
       "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\" "
       "stroke-dasharray=\"6 4\"/>\n"
-      "<polyline points=\"%s\" fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\"/>\n",
-      kLeft, kTopTop - 10, y_max, px(0), top_y(0), px(x_max), top_y(0), top);
+      "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#999\"/>\n",
+      kLeft, top_top - 12, y_max, px(0), top_y(0), axis_end, top_y(0), px(0), top_y(y_max),
+      px(0), top_y(-y_max));
+  for (double y : {y_max, -y_max}) {
+    out += absl::StrFormat(
+        "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" text-anchor=\"end\">%.1f m %s</text>\n",
+        px(0) - 8, top_y(y) + 4, std::abs(y), y > 0 ? "L" : "R");
+  }
   out += absl::StrFormat(
-      "<text x=\"%.0f\" y=\"540\">carry %.1f m (%.1f yd), apex %.1f m, flight %.2f s, "
+      "<polyline points=\"%s\" fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\"/>\n", top);
+  out += absl::StrFormat(
+      "<text x=\"%.0f\" y=\"%.0f\">carry %.1f m (%.1f yd), apex %.1f m, flight %.2f s, "
       "landing %.1f deg at %.1f m/s, %.1f m %s</text>\n</svg>\n",
-      kLeft, f.carry_m(), f.carry_m() / kMetresPerYard, f.apex_m(), f.flight_time_s(),
-      f.landing_angle_deg(), f.landing_speed_mps(), std::abs(f.lateral_m()),
+      kLeft, height - 15, f.carry_m(), f.carry_m() / kMetresPerYard, f.apex_m(),
+      f.flight_time_s(), f.landing_angle_deg(), f.landing_speed_mps(), std::abs(f.lateral_m()),
       f.lateral_m() >= 0 ? "right" : "left");
   return out;
 }
@@ -185,6 +249,14 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   v1::SimulateFlightResponse response;
   const grpc::Status status = stub->SimulateFlight(ctx.NewCall().get(), request, &response);
   if (!status.ok()) return ReportRpcError(status);
+  // The ball starts on the landing plane (z = 0): launched level or downward without the lift
+  // to climb, it lands at once. Say so rather than print a bare carry of 0.
+  if (response.flight_time_s() <= 0) {
+    std::cerr << "sportsim: note: the ball landed at launch (flight 0 s, carry 0 m): it starts "
+                 "on the ground (z = 0), and a launch angle of "
+              << Num(request.launch().launch_angle_deg())
+              << " deg does not take it up; give --launch-deg above 0\n";
+  }
   if (const std::string svg = absl::GetFlag(FLAGS_svg); !svg.empty()) {
     const v1::LaunchConditions& l = request.launch();
     std::ofstream out(svg);

@@ -16,8 +16,10 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/flags/usage_config.h"
 #include "absl/strings/str_cat.h"
 #include "client/cli.h"
+#include "client/command_flags.h"
 #include "client/game_text.h"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
@@ -29,7 +31,7 @@ ABSL_FLAG(absl::Duration, timeout, absl::Seconds(30), "Deadline for each call");
 namespace sportsim::cli {
 namespace {
 
-constexpr const char* kUsage = R"(sportsim [--server HOST:PORT] [--format text|json|jsonl|csv] COMMAND ...
+constexpr const char* kUsage = R"(sportsim [--server HOST:PORT] [--format text|json|jsonl|csv] [--timeout D] COMMAND ...
 
 Commands:
   info                      server version, build and capabilities
@@ -42,8 +44,9 @@ Commands:
       --arm-length M --club-length M --arm-inertia KGM2 --arm-first-moment KGM
       --club-inertia KGM2 --club-mass KG --club-first-moment KGM --gravity MPS2]
   swing create [golfer/club, solver and --disable flags of swing simulate] [--tick-hz HZ]
-      [--seats N] [--seat-names A,B] [--profile realistic|arcade]   a live swing session;
-      prints its id and seat 0's token
+      [--seats N] [--seat-names A,B] [--profile realistic|arcade] [--club NAME and the ball
+      and air flags of swing simulate: a ball at each impact]   a live swing session; prints
+      its id and the seat tokens
   swing list [--page-size N --page-token T] | swing get ID
   swing start ID --token T [torque flags of swing simulate: --qalpha --qbeta --qbeta-until
       --until --duration]            a swing with that torque program from the next tick
@@ -58,11 +61,13 @@ Commands:
       [--launch-direction-deg DEG] [--wind MPS[,TOWARD_DEG[,log]]] [--temperature-c C]
       [--pressure-pa PA] [--humidity F] [--altitude-m M] [--dt S] [--sample-interval S]
       [--disable drag,lift,spin_decay,wind] [--aero ferguson2022|nathan] [--svg FILE]
+      (RK4 at --dt: the flight takes no --integrator, --tolerance or --max-step)
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
       --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
       [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]
       [--b B] [--engine event|stepped] [--integrator euler|semi_implicit_euler|rk4] [--dt S]
       [--no-ccd] [--disable EFFECT,...] [--enable drag] [--param NAME=VALUE ...]
+      (--integrator, --dt, --no-ccd: with --engine stepped only)
       [--cushion-model han|mirror] [--noise X --seed N] [--jitter M --rack-seed N]
       [--sample-rate HZ] [--max-time S] [--svg FILE]
   table create [setup and solver flags of shot simulate] [--seats N] [--seat-names A,B]
@@ -79,60 +84,14 @@ Commands:
   table place ID --token T --ball ID@X,Y   ball in hand (the seat to play, balls at rest)
   table turn ID --token T --seat N | table reset ID --token T | table delete ID --token T
   table watch ID [--rate HZ] [--until-rest] [--fields position,velocity,spin,orientation]
-      [--changed-only] [--from-sequence N] [--svg FILE]   snapshots as they come
-Flags may be written --name value or --name=value; dashes and underscores are the same.
+      [--changed-only] [--from-sequence N] [--svg FILE]   snapshots as they come; --until-rest
+      exits at the end of the shot in progress, or (at rest) of the next shot
+Flags may be written --name value or --name=value; dashes and underscores are the same. A
+flag the command does not take is a usage error. --format jsonl: streams (the watch commands,
+swing drive) only; csv: commands with a series (simulate, watch, drive) only.
 Errors: the gRPC status code name and message on stderr, exit status = the code number
-(64 for usage errors). --helpfull lists every flag.)";
-
-constexpr std::string_view kRepeatable[] = {"ball", "param", "rule"};
-
-std::map<std::string, std::vector<std::string>, std::less<>>& Repeated() {
-  static auto* values = new std::map<std::string, std::vector<std::string>, std::less<>>();
-  return *values;
-}
-
-// Names (with underscores) of the flags written on the command line.
-std::set<std::string, std::less<>>& Given() {
-  static auto* names = new std::set<std::string, std::less<>>();
-  return *names;
-}
-
-// absl flag names cannot contain '-': accept --qbeta-until for --qbeta_until. Repeatable flags
-// (--ball ID@X,Y, --param NAME=VALUE, --rule NAME=VALUE) are taken out here, since absl keeps only a flag's last
-// value and splits vectors at commas.
-std::vector<std::string> NormalizeFlagNames(int argc, char** argv) {
-  std::vector<std::string> out;
-  bool flags_done = false;
-  for (int i = 0; i < argc; ++i) {
-    std::string a = argv[i];
-    if (a == "--") flags_done = true;
-    if (!flags_done && a.size() > 2 && a[0] == '-' && a[1] == '-') {
-      const size_t eq = a.find('=');
-      const std::string name = a.substr(2, eq == std::string::npos ? std::string::npos : eq - 2);
-      bool repeatable = false;
-      for (std::string_view r : kRepeatable) repeatable |= name == r;
-      if (repeatable) {
-        if (eq != std::string::npos) {
-          Repeated()[name].push_back(a.substr(eq + 1));
-        } else if (i + 1 < argc) {
-          Repeated()[name].push_back(argv[++i]);
-        } else {
-          Repeated()[name].push_back("");
-        }
-        continue;
-      }
-    }
-    if (!flags_done && i > 0 && a.size() > 2 && a[0] == '-' && a[1] == '-') {
-      const size_t end = a.find('=');
-      for (size_t j = 2; j < std::min(end, a.size()); ++j) {
-        if (a[j] == '-') a[j] = '_';
-      }
-      Given().insert(a.substr(2, end == std::string::npos ? std::string::npos : end - 2));
-    }
-    out.push_back(std::move(a));
-  }
-  return out;
-}
+(64 for usage errors; 65: swing drive, some commands refused).
+sportsim COMMAND SUBCOMMAND --help lists a command's flags; --helpfull lists every flag.)";
 
 void Int64FieldNames(const google::protobuf::Descriptor* d, std::set<std::string>* names,
                      std::set<const google::protobuf::Descriptor*>* seen) {
@@ -198,16 +157,35 @@ std::string Int64AsNumbers(const google::protobuf::Descriptor* d, const std::str
 // key out. Protobuf's printer (always_print_primitive_fields) already leaves out unset optional
 // fields and unset messages, but prints an empty repeated field as [] and an empty map as {}:
 // this pass drops those inside every GameState object, walking the JSON text along the message
-// type and keeping the printer's layout (indentation, key order) for everything else.
-constexpr std::string_view kPrunedType = "sportsim.v1.GameState";
+// type and keeping the printer's layout (indentation, key order) for everything else. It also
+// drops what means nothing where it is printed: a seat's empty token (only the create calls
+// return tokens), and on a physics or table event (not a game event) the game keys reason,
+// points and choices when empty or zero.
+constexpr std::string_view kGameStateType = "sportsim.v1.GameState";
+constexpr std::string_view kSeatType = "sportsim.v1.Seat";
+constexpr std::string_view kTableEventType = "sportsim.v1.TableEvent";
 
 bool HasPrunedType(const google::protobuf::Descriptor* d,
                    std::set<const google::protobuf::Descriptor*>* seen) {
-  if (d->full_name() == kPrunedType) return true;
+  if (d->full_name() == kGameStateType || d->full_name() == kSeatType ||
+      d->full_name() == kTableEventType) {
+    return true;
+  }
   if (!seen->insert(d).second) return false;
   for (int i = 0; i < d->field_count(); ++i) {
     const google::protobuf::Descriptor* m = d->field(i)->message_type();
     if (m != nullptr && HasPrunedType(m, seen)) return true;
+  }
+  return false;
+}
+
+// The kinds of game events (EventKind foul ... match_end), as the JSON prints them.
+bool IsGameEventKind(std::string_view quoted_kind) {
+  static constexpr std::string_view kGameKinds[] = {
+      "\"foul\"", "\"score\"", "\"respot\"", "\"decision\"", "\"warning\"",
+      "\"frame_end\"", "\"match_end\""};
+  for (std::string_view k : kGameKinds) {
+    if (k == quoted_kind) return true;
   }
   return false;
 }
@@ -269,8 +247,15 @@ class JsonPruner {
 
   std::string Object(const google::protobuf::Descriptor* type, bool map_values) {
     ++pos_;  // {
-    const bool prune = type != nullptr && !map_values && type->full_name() == kPrunedType;
-    std::vector<std::string> items;
+    const std::string_view type_name =
+        type != nullptr && !map_values ? std::string_view(type->full_name()) : "";
+    struct Member {
+      std::string key;
+      std::string value;
+      std::string item;
+      const google::protobuf::FieldDescriptor* field;
+    };
+    std::vector<Member> members;
     std::string tail = Space();
     while (pos_ < s_.size() && Peek() != '}') {
       std::string item = tail;
@@ -296,15 +281,34 @@ class JsonPruner {
       }
       item += value;
       tail = Space();
-      const bool drop = prune && f != nullptr && f->is_repeated() && Empty(value);
       if (Peek() == ',') {
         ++pos_;
         item += tail;
         tail = Space();
       }
-      if (!drop) items.push_back(std::move(item));
+      members.push_back({key, std::move(value), std::move(item), f});
     }
     ++pos_;  // }
+    bool game_event = true;
+    if (type_name == kTableEventType) {
+      game_event = false;
+      for (const Member& m : members) {
+        if (m.key == "kind") game_event = IsGameEventKind(m.value);
+      }
+    }
+    std::vector<std::string> items;
+    for (Member& m : members) {
+      bool drop = false;
+      if (type_name == kGameStateType) {
+        drop = m.field != nullptr && m.field->is_repeated() && Empty(m.value);
+      } else if (type_name == kSeatType) {
+        drop = m.key == "token" && m.value == "\"\"";
+      } else if (type_name == kTableEventType && !game_event) {
+        drop = (m.key == "reason" && m.value == "\"\"") || (m.key == "points" && m.value == "0") ||
+               (m.key == "choices" && Empty(m.value));
+      }
+      if (!drop) items.push_back(std::move(m.item));
+    }
     return Join('{', items, tail, '}');
   }
 
@@ -329,6 +333,31 @@ class JsonPruner {
   std::string_view s_;
   size_t pos_ = 0;
 };
+
+// Protobuf prints a negative zero as -0; the contract prints 0 (a value that is zero either way
+// reads the same, and `-0` surprises readers and some parsers). Outside strings only.
+std::string NoNegativeZero(const std::string& json) {
+  std::string out;
+  out.reserve(json.size());
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (c == '"') {
+      const size_t start = i++;
+      while (i < json.size() && json[i] != '"') i += json[i] == '\\' ? 2 : 1;
+      out.append(json, start, i - start + 1);
+      continue;
+    }
+    if (c == '-' && i + 1 < json.size() && json[i + 1] == '0') {
+      const char next = i + 2 < json.size() ? json[i + 2] : ' ';
+      if (next != '.' && next != 'e' && next != 'E' &&
+          !std::isdigit(static_cast<unsigned char>(next))) {
+        continue;  // drop the sign of "-0"
+      }
+    }
+    out += c;
+  }
+  return out;
+}
 
 std::string PruneGameJson(const google::protobuf::Descriptor* d, const std::string& json) {
   std::set<const google::protobuf::Descriptor*> seen;
@@ -356,9 +385,83 @@ const char* CodeName(int code) {
   return code >= 0 && code <= 16 ? kNames[code] : "UNKNOWN";
 }
 
+namespace {
+
+// The request fields the server's messages name, and the flags that set them. A message that
+// names one gets the flag after it, so that "place it with table.balls" points at --ball.
+struct FieldFlag {
+  std::string_view field;
+  std::string_view flag;
+};
+constexpr FieldFlag kFieldFlags[] = {
+    {"table.balls", "--ball"},          {"table.preset", "--table"},
+    {"table.rack_jitter_m", "--jitter"}, {"table.rack", "--rack"},
+    {"table.params", "--param"},        {"table.cushion_model", "--cushion-model"},
+    {"strike.ball_speed_mps", "--ball-speed"}, {"strike.speed_mps", "--speed"},
+    {"strike.ball", "--strike-ball"},   {"strike.phi_deg", "--phi"},
+    {"strike.theta_deg", "--theta"},    {"strike.a", "--a"},
+    {"strike.b", "--b"},                {"strike.noise", "--noise"},
+    {"solver.dt_s", "--dt"},            {"solver.tolerance", "--tolerance"},
+    {"solver.max_step_s", "--max-step"}, {"solver.integrator", "--integrator"},
+    {"solver.engine", "--engine"},      {"solver.disable", "--disable"},
+    {"solver.enable", "--enable"},      {"max_time_s", "--max-time"},
+    {"sample_rate_hz", "--sample-rate"}, {"tick_hz", "--tick-hz"},
+    {"seat_names", "--seat-names"},     {"launch.ball_speed_mps", "--ball-speed"},
+    {"launch.launch_angle_deg", "--launch-deg"}, {"launch.spin_rpm", "--spin-rpm"},
+    {"launch.spin_axis_deg", "--spin-axis-deg"},
+    {"launch.launch_direction_deg", "--launch-direction-deg"},
+    {"sample_interval_s", "--sample-interval"}, {"duration_s", "--duration"},
+    {"game.race_to", "--race-to"},      {"game.shot_clock_s", "--shot-clock"},
+    {"game.rules", "--rule"},           {"game.noise", "--noise"},
+    {"ball.club", "--club"},            {"ball.dynamic_loft_deg", "--dynamic-loft-deg"},
+    {"ball.face_angle_deg", "--face-angle-deg"}, {"ball.club_path_deg", "--club-path-deg"},
+    {"ball.cor", "--cor"},
+};
+
+bool FieldChar(char c) {
+  return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+}
+
+// "strike.ball: no ball "x" (place it with table.balls)" ->
+// "strike.ball (--strike-ball): no ball "x" (place it with table.balls (--ball))". Each field
+// is named once (its first mention), whole words only.
+std::string WithFlagNames(const std::string& message) {
+  std::vector<std::pair<size_t, std::string>> inserts;  // after position, text
+  std::set<std::string_view> done;
+  for (size_t i = 0; i < message.size(); ++i) {
+    if (i > 0 && (FieldChar(message[i - 1]) || message[i - 1] == '.')) continue;
+    const FieldFlag* best = nullptr;
+    for (const FieldFlag& f : kFieldFlags) {
+      if (message.compare(i, f.field.size(), f.field) != 0) continue;
+      const size_t end = i + f.field.size();
+      if (end < message.size() && (FieldChar(message[end]) || message[end] == '.')) continue;
+      if (best == nullptr || f.field.size() > best->field.size()) best = &f;
+    }
+    if (best == nullptr || !done.insert(best->field).second) continue;
+    size_t end = i + best->field.size();
+    // table.balls[1].id: after the index and sub-field.
+    while (end < message.size() && (message[end] == '[' || message[end] == '.')) {
+      const char open = message[end];
+      ++end;
+      while (end < message.size() && (open == '[' ? message[end] != ']' : FieldChar(message[end]))) {
+        ++end;
+      }
+      if (open == '[' && end < message.size()) ++end;
+    }
+    inserts.emplace_back(end, std::string(" (") + std::string(best->flag) + ")");
+    i = end - 1;
+  }
+  std::string out = message;
+  for (auto it = inserts.rbegin(); it != inserts.rend(); ++it) out.insert(it->first, it->second);
+  return out;
+}
+
+}  // namespace
+
 int ReportRpcError(const grpc::Status& status) {
   const int code = static_cast<int>(status.error_code());
-  std::cerr << "sportsim: " << CodeName(code) << ": " << status.error_message() << "\n";
+  std::cerr << "sportsim: " << CodeName(code) << ": " << WithFlagNames(status.error_message())
+            << "\n";
   return code == 0 ? 1 : code;
 }
 
@@ -374,18 +477,12 @@ std::string ToJson(const google::protobuf::Message& message, bool one_line) {
   options.add_whitespace = !one_line;
   std::string out;
   (void)google::protobuf::util::MessageToJsonString(message, &out, options);
-  return Int64AsNumbers(message.GetDescriptor(), PruneGameJson(message.GetDescriptor(), out));
-}
-
-bool FlagGiven(std::string_view name) { return Given().contains(name); }
-
-const std::vector<std::string>& RepeatedFlagValues(std::string_view name) {
-  static const std::vector<std::string> kNone;
-  auto it = Repeated().find(name);
-  return it == Repeated().end() ? kNone : it->second;
+  return NoNegativeZero(
+      Int64AsNumbers(message.GetDescriptor(), PruneGameJson(message.GetDescriptor(), out)));
 }
 
 std::string Num(double v) {
+  if (v == 0) return "0";  // and not "-0"
   char buf[64];
   const auto r = std::to_chars(buf, buf + sizeof(buf), v);
   return std::string(buf, r.ptr);
@@ -455,35 +552,77 @@ int RunHealth(const Context& ctx, const std::vector<std::string>& args) {
 
 int main(int argc, char** argv) {
   using namespace sportsim::cli;
+  // The flag library's own help (--helpfull, which this parser does not hand it) would name
+  // source files by their build path: shorten them anyway, and keep the usage text ours.
+  absl::FlagsUsageConfig usage_config;
+  usage_config.normalize_filename = [](absl::string_view f) {
+    const size_t slash = f.rfind('/');
+    return std::string(slash == absl::string_view::npos ? f : f.substr(slash + 1));
+  };
+  absl::SetFlagsUsageConfig(usage_config);
   absl::SetProgramUsageMessage(kUsage);
-  std::vector<std::string> normalized = NormalizeFlagNames(argc, argv);
-  std::vector<char*> args_c;
-  for (std::string& s : normalized) args_c.push_back(s.data());
-  std::vector<char*> positional =
-      absl::ParseCommandLine(static_cast<int>(args_c.size()), args_c.data());
+
+  std::vector<std::string> positional;
+  HelpRequest help = HelpRequest::kNone;
+  if (auto bad = ParseArgs(argc, argv, &positional, &help)) return UsageError(*bad);
+  if (help == HelpRequest::kHelpFull) {
+    std::cout << FullHelp(kUsage);
+    return 0;
+  }
+  if (help == HelpRequest::kHelp) {
+    if (positional.empty()) {
+      std::cout << kUsage << "\n";
+      return 0;
+    }
+    const auto text = CommandHelp(positional[0], positional.size() > 1 ? positional[1] : "");
+    if (!text) {
+      return UsageError("no help for '" + positional[0] +
+                        (positional.size() > 1 ? " " + positional[1] : std::string()) +
+                        "' (commands: info, health, swing, flight, shot, table)");
+    }
+    std::cout << *text;
+    return 0;
+  }
 
   Context ctx;
   ctx.server = absl::GetFlag(FLAGS_server);
   ctx.timeout = absl::GetFlag(FLAGS_timeout);
+  if (!(ctx.timeout > absl::ZeroDuration()) || ctx.timeout == absl::InfiniteDuration()) {
+    return UsageError("--timeout: must be a finite duration more than 0 (e.g. 500ms, 30s), got " +
+                      absl::FormatDuration(ctx.timeout));
+  }
   const std::string format = absl::GetFlag(FLAGS_format);
   if (format == "text") ctx.format = Format::kText;
   else if (format == "json") ctx.format = Format::kJson;
   else if (format == "jsonl") ctx.format = Format::kJsonl;
   else if (format == "csv") ctx.format = Format::kCsv;
-  else return UsageError("--format must be text, json, jsonl or csv, got '" + format + "'");
+  else return UsageError("--format: must be text, json, jsonl or csv, got '" + format + "'");
 
-  if (positional.size() < 2) {
-    std::cerr << kUsage << "\n";
-    return kUsageExit;
+  if (positional.empty()) {
+    return UsageError("give a command: info, health, swing, flight, shot or table (sportsim "
+                      "--help lists them)");
   }
-  const std::string command = positional[1];
-  std::vector<std::string> rest(positional.begin() + 2, positional.end());
+  const std::string command = positional[0];
+  std::vector<std::string> rest(positional.begin() + 1, positional.end());
   // Sampled trajectories can be large: accept what the server may send (64 MiB).
   grpc::ChannelArguments channel_args;
   channel_args.SetMaxReceiveMessageSize(64 << 20);
   ctx.channel = grpc::CreateCustomChannel(ctx.server, grpc::InsecureChannelCredentials(),
                                           channel_args);
   if (auto bad = CheckGameFlags(command, rest.empty() ? "" : rest[0])) return UsageError(*bad);
+  const bool has_sub = command != "info" && command != "health";
+  if (const CommandSpec* spec =
+          FindCommand(command, has_sub ? (rest.empty() ? "" : rest[0]) : "")) {
+    if (auto bad = CheckFlagsApply(*spec)) return UsageError(*bad);
+    const std::string name = has_sub ? command + " " + rest[0] : command;
+    if (ctx.format == Format::kCsv && !spec->series && command != "health") {
+      return UsageError("--format csv: " + name + " has no csv form (json or text)");
+    }
+    if (ctx.format == Format::kJsonl && !spec->stream) {
+      return UsageError("--format jsonl: " + name + " prints one document, not a stream "
+                        "(jsonl is for table watch, swing watch and swing drive; use json)");
+    }
+  }
   if (command == "info") return RunInfo(ctx, rest);
   if (command == "health") return RunHealth(ctx, rest);
   if (command == "swing") return RunSwing(ctx, rest);

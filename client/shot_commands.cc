@@ -1,4 +1,5 @@
 // `sportsim shot ...`: fast-forward a cue shot (Billiards/SimulateShot).
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -16,6 +17,7 @@
 #include "absl/strings/str_split.h"
 #include "client/billiards_flags.h"
 #include "client/cli.h"
+#include "client/command_flags.h"
 #include "client/table_svg.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
@@ -48,6 +50,12 @@ ABSL_FLAG(std::string, svg, "", "Write a picture to this SVG file (shots, tables
 namespace sportsim::cli {
 
 std::optional<std::string> BuildSetup(v1::TableSetup* t) {
+  if (FlagGiven("table") && absl::GetFlag(FLAGS_table).empty()) {
+    return "--table: needs a preset: pool-7ft, pool-8ft, pool-9ft, snooker, carom or unbounded";
+  }
+  if (FlagGiven("rack") && absl::GetFlag(FLAGS_rack).empty()) {
+    return "--rack: needs a rack: empty, 8ball, 9ball, snooker, three-cushion or chapter19";
+  }
   t->set_preset(absl::GetFlag(FLAGS_table));
   t->set_rack(absl::GetFlag(FLAGS_rack));
   t->set_rack_jitter_m(absl::GetFlag(FLAGS_jitter));
@@ -61,6 +69,10 @@ std::optional<std::string> BuildSetup(v1::TableSetup* t) {
     if (at == std::string::npos || at == 0 || xy.size() != 2 || !absl::SimpleAtod(xy[0], &x) ||
         !absl::SimpleAtod(xy[1], &y)) {
       return "--ball must be ID@X,Y (metres), got '" + spec + "'";
+    }
+    const std::string id = spec.substr(0, at);
+    for (const v1::BallPlacement& earlier : t->balls()) {
+      if (earlier.id() == id) return "--ball: " + id + " given twice";
     }
     v1::BallPlacement* b = t->add_balls();
     b->set_id(spec.substr(0, at));
@@ -87,6 +99,18 @@ std::optional<std::string> BuildSolver(v1::SolverConfig* s) {
   if (engine == "stepped") s->set_engine(v1::ENGINE_STEPPED);
   else if (engine == "event") s->set_engine(v1::ENGINE_EVENT);
   else if (!engine.empty()) return "--engine must be event or stepped, got '" + engine + "'";
+  // The step settings mean something to the stepped engine only: asked or chosen by the
+  // server because drag is on (the event engine has no closed form with drag).
+  const std::vector<std::string> enabled = absl::GetFlag(FLAGS_enable);
+  const bool drag = std::find(enabled.begin(), enabled.end(), "drag") != enabled.end();
+  const bool stepped = engine == "stepped" || (engine.empty() && drag);
+  for (const char* flag : {"integrator", "dt", "no_ccd"}) {
+    if (FlagGiven(flag) && !stepped) {
+      return Dashed(flag) + ": applies to the stepped engine only (" +
+             (engine.empty() ? "the default engine is event" : "--engine " + engine) +
+             "; add --engine stepped)";
+    }
+  }
   const std::string integ = absl::GetFlag(FLAGS_integrator);
   if (integ == "rk4") s->set_integrator(v1::BILLIARDS_INTEGRATOR_RK4);
   else if (integ == "euler") s->set_integrator(v1::BILLIARDS_INTEGRATOR_EULER);
@@ -176,12 +200,26 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
   if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
   if (auto bad = BuildStrike(request.mutable_strike())) return UsageError(*bad);
+  // An empty rack holds only the balls --ball puts there: without the struck one there is
+  // nothing to strike (the server would say so in its own field names).
+  if (request.table().rack() == "empty") {
+    const std::string& struck = request.strike().ball();
+    bool placed = false;
+    for (const v1::BallPlacement& b : request.table().balls()) placed |= b.id() == struck;
+    if (!placed) {
+      return UsageError("--rack empty: no " + struck + " ball to strike: place it with --ball " +
+                        struck + "@X,Y");
+    }
+  }
   const std::string svg = absl::GetFlag(FLAGS_svg);
   // Drawings and CSV need a trajectory: 240 samples/s unless told otherwise.
   const bool want_samples = !svg.empty() || ctx.format == Format::kCsv;
   if (auto rate = absl::GetFlag(FLAGS_sample_rate)) request.set_sample_rate_hz(*rate);
   else if (want_samples) request.set_sample_rate_hz(240);
-  if (auto t = absl::GetFlag(FLAGS_max_time)) request.set_max_time_s(*t);
+  if (auto t = absl::GetFlag(FLAGS_max_time)) {
+    if (!(*t > 0 && *t <= 3600)) return UsageError("--max-time: must be in (0, 3600] s, got " + Num(*t));
+    request.set_max_time_s(*t);
+  }
   request.set_include_geometry(!svg.empty());
 
   auto stub = v1::Billiards::NewStub(ctx.channel);

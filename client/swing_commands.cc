@@ -10,6 +10,7 @@
 #include "absl/flags/flag.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
+#include "client/command_flags.h"
 #include "client/swing_flags.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
@@ -36,7 +37,7 @@ ABSL_FLAG(std::optional<double>, club_first_moment, std::nullopt, "Club first mo
 ABSL_FLAG(std::optional<double>, gravity, std::nullopt, "Gravity (m/s^2); default 9.8");
 ABSL_FLAG(std::vector<std::string>, disable, {}, "Effects to switch off (swing: gravity,shoulder_accel,wrist_torque; shot: see info)");
 ABSL_FLAG(std::string, club, "",
-          "swing simulate: launch a ball at the impact with this club (driver, 3-wood, 3-iron, "
+          "swing simulate, swing create: launch a ball at the impact with this club (driver, 3-wood, 3-iron, "
           "5-iron, 7-iron, 9-iron, pitching-wedge, sand-wedge) and fly it (flight's air flags)");
 ABSL_FLAG(std::optional<double>, dynamic_loft_deg, std::nullopt,
           "With --club: face loft at impact (deg); default the club's static loft");
@@ -125,6 +126,32 @@ std::optional<std::string> BuildSwingEffects(std::vector<v1::SwingEffect>* disab
   return std::nullopt;
 }
 
+std::optional<std::string> BuildBallStrike(v1::BallStrike* b) {
+  const std::string club = absl::GetFlag(FLAGS_club);
+  if (club.empty()) {
+    if (FlagGiven("club")) return "--club: needs a club preset (driver, 7-iron, ...)";
+    // The ball's own flags and the air it flies through mean nothing without a ball.
+    for (const char* flag : {"dynamic_loft_deg", "face_angle_deg", "club_path_deg", "cor",
+                             "wind", "temperature_c", "pressure_pa", "humidity", "altitude_m",
+                             "aero", "sample_interval"}) {
+      if (FlagGiven(flag)) return Dashed(flag) + ": describes the ball: give --club too";
+    }
+    return std::nullopt;
+  }
+  b->set_club(club);
+  if (auto v = absl::GetFlag(FLAGS_dynamic_loft_deg)) b->set_dynamic_loft_deg(*v);
+  b->set_face_angle_deg(absl::GetFlag(FLAGS_face_angle_deg));
+  b->set_club_path_deg(absl::GetFlag(FLAGS_club_path_deg));
+  if (auto v = absl::GetFlag(FLAGS_cor)) b->set_cor(*v);
+  v1::SimulateFlightRequest air;
+  if (auto bad = BuildFlightAir(&air)) return bad;
+  *b->mutable_atmosphere() = air.atmosphere();
+  *b->mutable_wind() = air.wind();
+  b->set_aero_fit(air.aero_fit());
+  if (air.has_sample_interval_s()) b->set_sample_interval_s(air.sample_interval_s());
+  return std::nullopt;
+}
+
 std::optional<double> ArmLengthFlag() { return absl::GetFlag(FLAGS_arm_length); }
 std::optional<double> ClubLengthFlag() { return absl::GetFlag(FLAGS_club_length); }
 
@@ -157,20 +184,8 @@ std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
   const int stride = absl::GetFlag(FLAGS_stride);
   if (stride < 0) return "--stride must be >= 0";
   r->set_sample_stride(static_cast<uint32_t>(stride));
-  if (const std::string club = absl::GetFlag(FLAGS_club); !club.empty()) {
-    v1::BallStrike* b = r->mutable_ball();
-    b->set_club(club);
-    if (auto v = absl::GetFlag(FLAGS_dynamic_loft_deg)) b->set_dynamic_loft_deg(*v);
-    b->set_face_angle_deg(absl::GetFlag(FLAGS_face_angle_deg));
-    b->set_club_path_deg(absl::GetFlag(FLAGS_club_path_deg));
-    if (auto v = absl::GetFlag(FLAGS_cor)) b->set_cor(*v);
-    v1::SimulateFlightRequest air;
-    if (auto bad = BuildFlightAir(&air)) return bad;
-    *b->mutable_atmosphere() = air.atmosphere();
-    *b->mutable_wind() = air.wind();
-    b->set_aero_fit(air.aero_fit());
-    if (air.has_sample_interval_s()) b->set_sample_interval_s(air.sample_interval_s());
-  }
+  if (auto bad = BuildBallStrike(r->mutable_ball())) return bad;
+  if (r->ball().club().empty()) r->clear_ball();
   return std::nullopt;
 }
 

@@ -26,6 +26,11 @@ std::optional<std::string> BuildTorqueProgram(v1::TorqueProgram* torques);
 /// --until impact|duration, --duration
 std::optional<std::string> BuildSwingStop(v1::SwingStop* stop, std::optional<double>* duration_s);
 
+/// --club and the ball's flags (--dynamic-loft-deg --face-angle-deg --club-path-deg --cor and
+/// the air flags): the ball launched at each impact. Left empty (club "") without --club, when
+/// the ball's flags given are a usage error.
+std::optional<std::string> BuildBallStrike(v1::BallStrike* ball);
+
 /// The flight's air flags (defined in flight_commands.cc): --wind --temperature-c --pressure-pa
 /// --humidity --altitude-m --sample-interval --aero. Shared by `flight simulate` and the ball a
 /// swing launches (`swing simulate --club`).

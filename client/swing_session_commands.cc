@@ -86,9 +86,8 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   std::vector<v1::SwingEffect> disabled;
   if (auto bad = BuildSwingEffects(&disabled)) return UsageError(*bad);
   for (v1::SwingEffect e : disabled) request.add_disabled_effects(e);
-  const int seats = absl::GetFlag(FLAGS_seats);
-  if (seats < 0) return UsageError("--seats must be positive");
-  request.set_seats(static_cast<uint32_t>(seats));
+  if (auto bad = CheckSeatFlags()) return UsageError(*bad);
+  request.set_seats(static_cast<uint32_t>(absl::GetFlag(FLAGS_seats)));
   for (const std::string& n : absl::GetFlag(FLAGS_seat_names)) request.add_seat_names(n);
   request.set_tick_hz(absl::GetFlag(FLAGS_tick_hz));
   const std::string profile = absl::GetFlag(FLAGS_profile);
@@ -97,6 +96,9 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   else if (!profile.empty()) {
     return UsageError("--profile must be realistic or arcade, got '" + profile + "'");
   }
+  // --club: every impact launches this ball and flies it (as swing simulate --club does).
+  if (auto bad = BuildBallStrike(request.mutable_ball())) return UsageError(*bad);
+  if (request.ball().club().empty()) request.clear_ball();
   v1::CreateSessionResponse r;
   const grpc::Status status = stub.CreateSession(ctx.NewCall().get(), request, &r);
   if (!status.ok()) return ReportRpcError(status);
@@ -106,13 +108,17 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
     for (const v1::Seat& s : r.seats()) {
       std::printf("  seat %u %-10s token %s\n", s.seat(), s.name().c_str(), s.token().c_str());
     }
+    if (request.has_ball()) {
+      std::printf("  each impact launches a ball (%s) and flies it\n", request.ball().club().c_str());
+    }
   });
 }
 
 int RunList(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
   if (!args.empty()) return UsageError("swing list takes flags only");
   v1::ListSessionsRequest request;
-  request.set_page_size(static_cast<uint32_t>(std::max(0, absl::GetFlag(FLAGS_page_size))));
+  if (auto bad = CheckPageSize()) return UsageError(*bad);
+  request.set_page_size(static_cast<uint32_t>(absl::GetFlag(FLAGS_page_size)));
   request.set_page_token(absl::GetFlag(FLAGS_page_token));
   v1::ListSessionsResponse r;
   const grpc::Status status = stub.ListSessions(ctx.NewCall().get(), request, &r);
@@ -492,11 +498,16 @@ class CommandInput {
         return Result::kBad;
       }
       *command = DriveCommand{.t_s = v[0], .qalpha_nm = v[1], .qbeta_nm = v[2]};
+      ++commands_;
       return Result::kCommand;
     }
   }
 
+  /// The commands read so far.
+  int commands() const { return commands_; }
+
  private:
+  int commands_ = 0;
   StdinLines lines_;
   int line_number_ = 0;
 };
@@ -532,6 +543,7 @@ int RunDrive(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   // The first command: at t = 0 its torques are the start's (until the next command); any
   // other time is sent as a command, the torques being 0 until then.
   CommandInput input;
+  bool first_in_start = false;  // the first line gave the start's torques (not a command)
   std::optional<DriveCommand> pending;
   std::string input_error;
   {
@@ -540,6 +552,7 @@ int RunDrive(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
       case CommandInput::Result::kBad: return UsageError(input_error);
       case CommandInput::Result::kCommand:
         if (first.t_s == 0) {
+          first_in_start = true;
           start.set_qalpha_nm(first.qalpha_nm);
           start.set_qbeta_nm(first.qbeta_nm);
         } else {
@@ -599,10 +612,14 @@ int RunDrive(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   StreamPrinter printer(ctx.format);
   SwingEnd end(/*at_impact=*/false);
   bool ended = false;
+  int refused = 0;
   v1::SwingSnapshot s;
   while (stream->Read(&s)) {
     for (const v1::SwingEvent& e : s.events()) {
-      if (e.kind() == v1::SWING_EVENT_COMMAND_REFUSED) ReportRefused(e);
+      if (e.kind() == v1::SWING_EVENT_COMMAND_REFUSED) {
+        ReportRefused(e);
+        ++refused;
+      }
     }
     printer.Add(s);
     if (!svg.empty()) AddSnapshot(s, &drawing);
@@ -618,6 +635,11 @@ int RunDrive(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   }
   if (!input_error.empty()) return UsageError(input_error);
   if (!status.ok()) return ReportRpcError(status);
+  if (refused > 0) {
+    std::cerr << absl::StrFormat("sportsim: %d of %d commands refused\n", refused,
+                                 std::max(refused, input.commands() - (first_in_start ? 1 : 0)));
+    return kRefusedCommandsExit;
+  }
   return 0;
 }
 

@@ -163,7 +163,7 @@ std::string SwingSvg(const SwingDrawing& d) {
   std::string svg = absl::StrFormat(
       "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
       "viewBox=\"0 0 %.0f %.0f\" font-family=\"sans-serif\">\n",
-      width_px, height_px + top + 50, width_px, height_px + top + 50);
+      width_px, height_px + top + 76, width_px, height_px + top + 76);
   absl::StrAppendFormat(&svg, "<rect width=\"100%%\" height=\"100%%\" fill=\"#ffffff\"/>\n");
   absl::StrAppendFormat(&svg, "<text x=\"10\" y=\"26\" font-size=\"18\">%s</text>\n",
                         SvgEscape(d.title));
@@ -223,10 +223,14 @@ std::string SwingSvg(const SwingDrawing& d) {
     absl::StrAppendFormat(&svg,
                           "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"5\" fill=\"#e01b1b\"/>\n",
                           X(impact->clubhead.x), Y(impact->clubhead.y));
+    // The label runs away from the nearer edge, so that it stays in the picture.
+    const bool right_half = X(impact->clubhead.x) > width_px / 2;
     absl::StrAppendFormat(&svg,
-                          "<text x=\"%.1f\" y=\"%.1f\" font-size=\"14\" fill=\"#e01b1b\">impact "
-                          "t = %.4f s: clubhead %.2f m/s (%.2f m/s over the ground)</text>\n",
-                          X(impact->clubhead.x) + 10, Y(impact->clubhead.y) + 22,
+                          "<text x=\"%.1f\" y=\"%.1f\" font-size=\"14\" fill=\"#e01b1b\" "
+                          "text-anchor=\"%s\">impact t = %.4f s: clubhead %.2f m/s (%.2f m/s "
+                          "over the ground)</text>\n",
+                          X(impact->clubhead.x) + (right_half ? -10 : 10),
+                          Y(impact->clubhead.y) + 22, right_half ? "end" : "start",
                           d.impact->t_s(), d.impact->clubhead_speed_mps(),
                           d.impact->clubhead_speed_ground_mps());
   }
@@ -235,17 +239,21 @@ std::string SwingSvg(const SwingDrawing& d) {
                         X(0), Y(0));
   const std::string every =
       interval_s > 0 ? absl::StrFormat("poses every %.0f ms", interval_s * 1e3) : "one pose";
+  // The caption on three short lines (one would run past the picture's 900 px).
   absl::StrAppendFormat(
       &svg,
       "<text x=\"10\" y=\"%.0f\" font-size=\"13\">shoulder frame, target to the left; %s of "
-      "%d states; arm blue (R = %.3f m), club dark (L = %.3f m%s); grey: clubhead path; red: "
-      "impact</text>\n",
-      height_px + top + 22, every, static_cast<int>(all.size()), len.arm_m, len.club_m,
-      len.solved ? ", from the states" : "");
+      "%d states</text>\n",
+      height_px + top + 22, every, static_cast<int>(all.size()));
+  absl::StrAppendFormat(
+      &svg,
+      "<text x=\"10\" y=\"%.0f\" font-size=\"13\">arm blue (R = %.3f m), club dark (L = %.3f "
+      "m%s); grey: clubhead path; red: impact</text>\n",
+      height_px + top + 40, len.arm_m, len.club_m, len.solved ? ", from the states" : "");
   absl::StrAppendFormat(&svg,
                         "<text x=\"10\" y=\"%.0f\" font-size=\"13\">&#8592; target (-x); scale "
                         "%.0f px/m</text>\n",
-                        height_px + top + 40, scale);
+                        height_px + top + 58, scale);
   svg += "</svg>\n";
   return svg;
 }

@@ -37,7 +37,8 @@ ABSL_FLAG(std::optional<double>, rate, std::nullopt,
           "table/swing watch, swing drive: snapshots per second at most (0, or above the tick "
           "rate: every tick); default 30 for tables, every tick for swings");
 ABSL_FLAG(bool, until_rest, false,
-          "table watch: exit after the first at-rest snapshot that follows a shot");
+          "table watch: exit when the table comes to rest after a shot: at the end of the shot "
+          "in progress, or, when the table is at rest, at the end of the next shot");
 ABSL_FLAG(std::vector<std::string>, fields, {},
           "table watch: position,velocity,spin,orientation (default all)");
 ABSL_FLAG(bool, changed_only, false, "table watch: only the balls that changed");
@@ -138,9 +139,8 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   v1::CreateTableRequest request;
   if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
   if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
-  const int seats = absl::GetFlag(FLAGS_seats);
-  if (seats < 0) return UsageError("--seats must be positive");
-  request.set_seats(static_cast<uint32_t>(seats));
+  if (auto bad = CheckSeatFlags()) return UsageError(*bad);
+  request.set_seats(static_cast<uint32_t>(absl::GetFlag(FLAGS_seats)));
   for (const std::string& n : absl::GetFlag(FLAGS_seat_names)) request.add_seat_names(n);
   request.set_tick_hz(absl::GetFlag(FLAGS_tick_hz));
   if (auto bad = BuildGame(&request)) return UsageError(*bad);
@@ -170,7 +170,8 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
 int RunList(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
   if (!args.empty()) return UsageError("table list takes flags only");
   v1::ListTablesRequest request;
-  request.set_page_size(static_cast<uint32_t>(std::max(0, absl::GetFlag(FLAGS_page_size))));
+  if (auto bad = CheckPageSize()) return UsageError(*bad);
+  request.set_page_size(static_cast<uint32_t>(absl::GetFlag(FLAGS_page_size)));
   request.set_page_token(absl::GetFlag(FLAGS_page_token));
   v1::ListTablesResponse r;
   const grpc::Status status = stub.ListTables(ctx.NewCall().get(), request, &r);
@@ -592,6 +593,32 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
 }
 
 }  // namespace
+
+std::optional<std::string> CheckSeatFlags() {
+  const int seats = absl::GetFlag(FLAGS_seats);
+  if (Given("seats") && (seats < 1 || seats > 16)) {
+    return absl::StrCat("--seats: must be in [1, 16], got ", seats);
+  }
+  const double tick_hz = absl::GetFlag(FLAGS_tick_hz);
+  if (Given("tick_hz") && !(tick_hz >= 1 && tick_hz <= 1000)) {
+    return "--tick-hz: must be in [1, 1000], got " + Num(tick_hz);
+  }
+  const std::vector<std::string> names = absl::GetFlag(FLAGS_seat_names);
+  for (size_t i = 0; i < names.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      if (names[i] == names[j]) return "--seat-names: '" + names[i] + "' given twice";
+    }
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> CheckPageSize() {
+  const int n = absl::GetFlag(FLAGS_page_size);
+  if (n < 0 || n > 1000) {
+    return absl::StrCat("--page-size: must be in [0, 1000] (0: the default, 100), got ", n);
+  }
+  return std::nullopt;
+}
 
 std::optional<std::string> CheckGameFlags(std::string_view command, std::string_view sub) {
   struct Use {

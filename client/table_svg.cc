@@ -213,10 +213,21 @@ std::string TableSvg(const TableDrawing& d) {
                           "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\" fill=\"%s\" "
                           "stroke=\"#000000\" stroke-width=\"1\"%s/>\n",
                           x, y, ball_px, BallColour(p.id), p.pocketed ? " opacity=\"0.5\"" : "");
-    absl::StrAppendFormat(&svg,
-                          "<text x=\"%.1f\" y=\"%.1f\" font-size=\"12\" fill=\"#ffffff\" "
-                          "stroke=\"#000000\" stroke-width=\"0.4\">%s</text>\n",
-                          x + ball_px + 2, y - ball_px - 2, SvgEscape(p.id));
+    // The id inside the ball when it fits (racked balls touch: labels beside them would
+    // overlap their neighbours), else beside it.
+    const double font_px = std::min(12.0, 1.1 * ball_px);
+    if (ball_px >= 6 && static_cast<double>(p.id.size()) * 0.62 * font_px <= 2 * ball_px) {
+      absl::StrAppendFormat(&svg,
+                            "<text x=\"%.1f\" y=\"%.1f\" font-size=\"%.1f\" "
+                            "text-anchor=\"middle\" fill=\"#000000\" stroke=\"#ffffff\" "
+                            "stroke-width=\"2\" paint-order=\"stroke\">%s</text>\n",
+                            x, y + 0.35 * font_px, font_px, SvgEscape(p.id));
+    } else {
+      absl::StrAppendFormat(&svg,
+                            "<text x=\"%.1f\" y=\"%.1f\" font-size=\"10\" fill=\"#ffffff\" "
+                            "stroke=\"#000000\" stroke-width=\"0.4\">%s</text>\n",
+                            x + ball_px + 2, y - ball_px - 2, SvgEscape(p.id));
+    }
   }
   absl::StrAppendFormat(&svg,
                         "<text x=\"10\" y=\"%.0f\" font-size=\"13\">paths: solid lines (stripes "

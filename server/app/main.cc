@@ -109,6 +109,12 @@ int main(int argc, char** argv) {
               << "\n";
     return 2;
   }
+  if (const absl::Duration grace = absl::GetFlag(FLAGS_shutdown_grace);
+      grace < absl::ZeroDuration() || grace > absl::Hours(1)) {
+    std::cerr << "sportsim-server: --shutdown_grace must be in [0s, 1h], got "
+              << absl::FormatDuration(grace) << "\n";
+    return 2;
+  }
   config.work.workers = absl::GetFlag(FLAGS_sim_workers);
   config.work.max_queued = absl::GetFlag(FLAGS_max_queued_simulations);
   config.work.cpu_budget = absl::GetFlag(FLAGS_max_request_cpu);

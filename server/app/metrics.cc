@@ -1,5 +1,6 @@
 #include "server/app/metrics.h"
 
+#include "server/app/server_app.h"
 #include "server/world/work_pool.h"
 
 #include <grpcpp/grpcpp.h>
@@ -206,6 +207,14 @@ class Collector final : public prometheus::Collectable {
       MetricFamily f = Family("sportsim_swing_commands_total",
                               "DriveSwing torque commands applied", MetricType::Counter);
       Add(&f, static_cast<double>(sessions.commands));
+      out.push_back(std::move(f));
+    }
+    {
+      MetricFamily f = Family("sportsim_malformed_messages_total",
+                              "Malformed request messages libprotobuf reported (e.g. invalid "
+                              "UTF-8 in a string field), counted instead of logged",
+                              MetricType::Counter);
+      Add(&f, static_cast<double>(ProtobufLogMessages()));
       out.push_back(std::move(f));
     }
     {

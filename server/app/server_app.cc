@@ -1,5 +1,9 @@
 #include "server/app/server_app.h"
 
+#include <google/protobuf/stubs/logging.h>
+
+#include <iostream>
+
 #include <netdb.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -94,6 +98,27 @@ absl::StatusOr<ListenAddress> ParseListenAddress(std::string_view address) {
   return out;
 }
 
+namespace {
+
+std::atomic<int64_t> protobuf_log_messages{0};
+
+// libprotobuf logs one ERROR line per request with a malformed string field (invalid UTF-8):
+// a client could fill the server's log at will. Such lines are counted instead
+// (sportsim_malformed_messages_total); anything graver still goes to stderr.
+void CountProtobufLog(google::protobuf::LogLevel level, const char* filename, int line,
+                      const std::string& message) {
+  if (level <= google::protobuf::LOGLEVEL_ERROR) {
+    protobuf_log_messages.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  std::cerr << "libprotobuf " << filename << ":" << line << ": " << message << "\n";
+}
+
+}  // namespace
+
+void InstallProtobufLogCounter() { google::protobuf::SetLogHandler(&CountProtobufLog); }
+int64_t ProtobufLogMessages() { return protobuf_log_messages.load(std::memory_order_relaxed); }
+
 absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& config) {
   struct {
     const char* name;
@@ -116,6 +141,7 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
     if (absl::Status s = CheckBindable(*address); !s.ok()) return s;
   }
 
+  InstallProtobufLogCounter();
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
 

@@ -42,6 +42,12 @@ struct ServerConfig {
                     ///< --max_request_cpu)
 };
 
+/// Routes libprotobuf's per-message error lines (malformed requests) to a counter instead of
+/// stderr. Process-wide; ServerApp::Start installs it.
+void InstallProtobufLogCounter();
+/// Malformed-message lines libprotobuf reported since then.
+int64_t ProtobufLogMessages();
+
 /// host and port of a listen address.
 struct ListenAddress {
   std::string host;

@@ -168,7 +168,7 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
     const uint32_t bit = b::EffectFromName(name);
     if (bit == 0) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "solver.disable: unknown effect \"%s\" (GetInfo lists the effects)", name));
+          "solver.disable: unknown effect %s (GetInfo lists the effects)", Quote(name)));
     }
     asked_off |= bit;
     o.effects = b::WithEffect(o.effects, bit, /*on=*/false);
@@ -177,11 +177,11 @@ absl::StatusOr<b::SolverOptions> SolverFromProto(const v1::SolverConfig& solver)
     const uint32_t bit = b::EffectFromName(name);
     if (bit == 0) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "solver.enable: unknown effect \"%s\" (GetInfo lists the effects)", name));
+          "solver.enable: unknown effect %s (GetInfo lists the effects)", Quote(name)));
     }
     if (asked_off & bit) {
       return absl::InvalidArgumentError(
-          absl::StrFormat("solver: effect \"%s\" is both enabled and disabled", name));
+          absl::StrFormat("solver: effect %s is both enabled and disabled", Quote(name)));
     }
     o.effects = b::WithEffect(o.effects, bit, /*on=*/true);
   }
@@ -244,7 +244,7 @@ absl::StatusOr<ShotJob> ShotJobFromProto(const v1::SimulateShotRequest& request)
     const int cue = state.Find(id);
     if (cue < 0) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "strike.ball: no ball \"%s\" on the table (place it with table.balls)", id));
+          "strike.ball: no ball %s on the table (place it with table.balls)", Quote(id)));
     }
     absl::StatusOr<b::StrikeOutcome> out =
         b::ApplyStrike(job.table.model, job.solver.effects, *strike, cue, &state);
@@ -260,7 +260,7 @@ absl::StatusOr<ShotJob> ShotJobFromProto(const v1::SimulateShotRequest& request)
       const int k = state.Find(m.id());
       if (k < 0) {
         return absl::InvalidArgumentError(
-            absl::StrFormat("%s.id: no ball \"%s\" on the table", field, m.id()));
+            absl::StrFormat("%s.id: no ball %s on the table", field, Quote(m.id())));
       }
       const double vals[] = {m.vx_mps(), m.vy_mps(), m.wx_rps(), m.wy_rps(), m.wz_rps()};
       const char* names[] = {"vx_mps", "vy_mps", "wx_rps", "wy_rps", "wz_rps"};

@@ -762,11 +762,11 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
     const int cue = t.rest.Find(id);
     if (cue < 0) {
       return absl::InvalidArgumentError(
-          absl::StrFormat("strike.ball: no ball \"%s\" on the table", id));
+          absl::StrFormat("strike.ball: no ball %s on the table", Quote(id)));
     }
     if (t.rest.balls[cue].state == b::MotionState::kPocketed) {
       return absl::FailedPreconditionError(absl::StrFormat(
-          "strike.ball: ball \"%s\" is pocketed; put it back with PlaceBall first", id));
+          "strike.ball: ball %s is pocketed; put it back with PlaceBall first", Quote(id)));
     }
     b::TableState state = t.rest;
     state.t_s = 0.0;

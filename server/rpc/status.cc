@@ -1,6 +1,8 @@
 #include "server/rpc/status.h"
 
+#include <algorithm>
 #include <string>
+#include <string_view>
 
 #include "absl/strings/str_format.h"
 
@@ -29,9 +31,23 @@ grpc::StatusCode ToGrpcCode(absl::StatusCode code) {
   }
 }
 
+std::string BoundedMessage(std::string_view message) {
+  std::string out;
+  out.reserve(std::min(message.size(), kMaxStatusMessageBytes));
+  for (size_t i = 0; i < message.size(); ++i) {
+    if (out.size() + 3 >= kMaxStatusMessageBytes) {
+      out += "...";
+      break;
+    }
+    const unsigned char c = static_cast<unsigned char>(message[i]);
+    out += (c >= 0x20 && c < 0x7f) ? static_cast<char>(c) : '?';
+  }
+  return out;
+}
+
 grpc::Status ToGrpcStatus(const absl::Status& status) {
   if (status.ok()) return grpc::Status::OK;
-  return grpc::Status(ToGrpcCode(status.code()), std::string(status.message()));
+  return grpc::Status(ToGrpcCode(status.code()), BoundedMessage(std::string_view(status.message().data(), status.message().size())));
 }
 
 }  // namespace sportsim::server

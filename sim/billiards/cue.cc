@@ -1,5 +1,6 @@
 #include "sim/billiards/cue.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
@@ -120,6 +121,32 @@ absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t ef
   return out;
 }
 
+namespace {
+
+// Distance from p to the segment ab.
+double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
+                       const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+}  // namespace
+
+bool InPocketMouth(const TableModel& model, const Eigen::Vector2d& xy) {
+  const double radius = model.radius();
+  bool near_pocket = false;
+  for (const Pocket& pocket : model.spec().pockets) {
+    near_pocket |= (xy - pocket.centre).norm() <= pocket.radius_m + 2.0 * radius;
+  }
+  if (!near_pocket) return false;
+  for (const CushionSegment& c : model.spec().cushions) {
+    if (SegmentDistance(xy, c.a, c.b) < radius - 1e-6) return false;
+  }
+  return true;
+}
+
 absl::Status ValidateLayout(const TableModel& model, const TableState& state) {
   const double radius = model.radius();
   std::set<std::string> ids;
@@ -141,7 +168,9 @@ absl::Status ValidateLayout(const TableModel& model, const TableState& state) {
     if (model.spec().bounded) {
       const double lim_x = 0.5 * model.spec().length_m - model.cushion_contact_distance();
       const double lim_y = 0.5 * model.spec().width_m - model.cushion_contact_distance();
-      if (std::abs(b.r.x()) > lim_x + 1e-9 || std::abs(b.r.y()) > lim_y + 1e-9) {
+      // A ball may also rest in a pocket's mouth, between the jaws, beyond the rail lines.
+      if ((std::abs(b.r.x()) > lim_x + 1e-9 || std::abs(b.r.y()) > lim_y + 1e-9) &&
+          !InPocketMouth(model, b.r.head<2>())) {
         return absl::InvalidArgumentError(absl::StrFormat(
             "ball %s at (%g, %g) m is not on the cloth: |x| <= %g, |y| <= %g m", b.id, b.r.x(),
             b.r.y(), lim_x, lim_y));

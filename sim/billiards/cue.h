@@ -61,8 +61,14 @@ struct StrikeOutcome {
 absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t effects,
                                             const CueStrike& strike);
 
+/// True when a ball centred at `xy` (m) rests in a pocket's mouth: near a pocket (within its
+/// capture radius plus a diameter of its centre) and clear of every cushion and jaw segment by
+/// a radius. The engine can leave a ball there, on the lip, outside the rail lines.
+bool InPocketMouth(const TableModel& model, const Eigen::Vector2d& xy);
+
 /// Checks a layout: every ball finite, on the cloth (centre inside the cushions by the contact
-/// distance), not pocketed twice, no two balls overlapping by more than 1 um, unique ids.
+/// distance, or resting in a pocket's mouth), not pocketed twice, no two balls overlapping by
+/// more than 1 um, unique ids.
 absl::Status ValidateLayout(const TableModel& model, const TableState& state);
 
 /// Validates the layout and the strike, then sets the velocity and spin of ball `cue` (which

@@ -4,6 +4,7 @@ import csv
 import io
 import json
 import os
+import re
 import select
 import signal
 import socket
@@ -261,6 +262,184 @@ class CliAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 64)
         self.assertIn("--integrator must be", r.stderr)
 
+    def assert_usage(self, args, message):
+        r = cli(self.server.address, *args)
+        self.assertEqual(r.returncode, 64, (args, r.stderr))
+        self.assertTrue(r.stderr.startswith("sportsim: usage: "), (args, r.stderr))
+        self.assertIn(message, r.stderr, args)
+        self.assertEqual(r.stdout, "", args)
+
+    def test_flags_that_do_not_apply_are_usage_errors(self):
+        flight = ("flight", "simulate", "--ball-speed", "70", "--launch-deg", "12",
+                  "--spin-rpm", "2500")
+        for args, message in (
+                (("table", "shoot", "t-x", "--token", "x", "--ball-speed", "1", "--rack",
+                  "9ball"), "--rack: not a flag of table shoot"),
+                (("table", "shoot", "t-x", "--token", "x", "--ball-speed", "1", "--table",
+                  "pool-7ft"), "--table: not a flag of table shoot"),
+                (("table", "create", "--ball-speed", "3"), "--ball-speed: not a flag of table "
+                                                           "create"),
+                (("table", "place", "t-x", "--token", "x", "--ball", "cue@0,0", "--phi", "3"),
+                 "--phi: not a flag of table place"),
+                (("table", "turn", "t-x", "--token", "x", "--seat", "1", "--ball-speed", "3"),
+                 "--ball-speed: not a flag of table turn"),
+                (("shot", "simulate", "--engine", "event", "--integrator", "rk4", "--dt",
+                  "0.001", "--ball-speed", "1"),
+                 "--integrator: applies to the stepped engine only"),
+                (("shot", "simulate", "--dt", "0.001", "--ball-speed", "1"),
+                 "--dt: applies to the stepped engine only"),
+                (("shot", "simulate", "--no-ccd", "--ball-speed", "1"),
+                 "--no-ccd: applies to the stepped engine only"),
+                (flight + ("--integrator", "dp45", "--tolerance", "1e-6"),
+                 "--integrator: not a flag of flight simulate"),
+                (flight + ("--tolerance", "1e-6"), "--tolerance: not a flag of flight simulate"),
+                (("swing", "start", "s-x", "--token", "x", "--gamma", "100", "--integrator",
+                  "dp45", "--dt", "0.5"), "--gamma: not a flag of swing start"),
+                (("swing", "start", "s-x", "--token", "x", "--integrator", "dp45"),
+                 "--integrator: not a flag of swing start"),
+                (("swing", "watch", "s-x", "--token", "x"), "--token: not a flag of swing watch"),
+                (("info", "--phi", "1"), "--phi: not a flag of info"),
+                (("swing", "simulate", "--cor", "0.8"), "--cor: describes the ball"),
+        ):
+            self.assert_usage(args, message)
+        # The stepped engine takes them all.
+        r = cli(self.server.address, "--format", "json", "shot", "simulate", "--engine",
+                "stepped", "--integrator", "rk4", "--dt", "0.001", "--no-ccd", *STRAIGHT_SHOT[2:])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual((json.loads(r.stdout)["integrator"], json.loads(r.stdout)["dt_s"]),
+                         ("rk4", 0.001))
+
+    def test_flag_values_unknown_flags_and_help(self):
+        for args, message in (
+                (("shot", "simulate", "--ball-speed=abc"), "--ball-speed: 'abc' is not a number"),
+                (("--bogus", "1", "info"), "--bogus: unknown flag"),
+                (("--timeout", "abc", "info"), "--timeout: 'abc' is not a duration"),
+                (("--timeout", "0s", "info"), "--timeout: must be a finite duration more than 0"),
+                (("--timeout", "-5s", "info"), "--timeout: must be a finite duration more than 0"),
+                (("table", "get", "t-x", "--geometry=maybe"), "--geometry: 'maybe' is not true"),
+                (("table", "turn", "t-x", "--token", "x", "--seat", "one"),
+                 "--seat: 'one' is not an integer"),
+                (("shot", "simulate", "--ball-speed"), "--ball-speed: needs a value"),
+                (("shot", "simulate", "--ball-speed", "1", "--phi", "1", "--phi", "2"),
+                 "--phi: given twice"),
+                ((), "give a command"),
+        ):
+            self.assert_usage(args, message)
+        r = cli(self.server.address, "--help")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("Commands:", r.stdout)
+        self.assertNotIn("No flags matched", r.stdout + r.stderr)
+        r = cli(self.server.address, "--helpfull")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("--ball-speed", r.stdout)
+        self.assertNotIn("/", "".join(line for line in r.stdout.splitlines()
+                                      if ".cc" in line or ".h:" in line))
+        self.assertNotIn(".cc", r.stdout)
+        # Every command's help lists exactly the flags it takes: each one listed is accepted
+        # (no "not a flag of" error), and a flag of another command is refused.
+        for words in (("info",), ("health",), ("shot", "simulate"), ("flight", "simulate"),
+                      ("swing", "simulate"), ("swing", "create"), ("swing", "start"),
+                      ("swing", "drive"), ("table", "create"), ("table", "shoot"),
+                      ("table", "place"), ("table", "watch"), ("table", "list")):
+            r = cli(self.server.address, *words, "--help")
+            self.assertEqual(r.returncode, 0, (words, r.stderr))
+            self.assertIn("sportsim " + " ".join(words), r.stdout)
+            flags = [line.split()[0] for line in r.stdout.split("Global flags")[0].splitlines()
+                     if line.startswith("  --")]
+            for flag in flags:
+                check = cli(self.server.address, "--server", "127.0.0.1:1", "--timeout", "1s",
+                            *words, flag + "=1")
+                self.assertNotIn("not a flag of", check.stderr, (words, flag))
+        r = cli(self.server.address, "table", "shoot", "--help")
+        for flag in ("--token", "--speed", "--ball-speed", "--phi", "--theta", "--a", "--b",
+                     "--noise", "--seed", "--strike-ball", "--next-seat", "--call", "--safety",
+                     "--push-out", "--nominate"):
+            self.assertIn("\n  " + flag + " ", r.stdout)
+        self.assertNotIn("--rack", r.stdout)
+
+    def test_ranges_stated_are_enforced(self):
+        for args, message in (
+                (("table", "list", "--page-size", "-5"), "--page-size: must be in [0, 1000]"),
+                (("swing", "list", "--page-size", "1001"), "--page-size: must be in [0, 1000]"),
+                (("table", "create", "--seats", "0"), "--seats: must be in [1, 16], got 0"),
+                (("swing", "create", "--seats", "17"), "--seats: must be in [1, 16], got 17"),
+                (("table", "create", "--tick-hz", "0"), "--tick-hz: must be in [1, 1000], got 0"),
+                (("swing", "create", "--tick-hz", "0"), "--tick-hz: must be in [1, 1000]"),
+                (STRAIGHT_SHOT + ("--max-time", "0"), "--max-time: must be in (0, 3600] s"),
+                (("shot", "simulate", "--table", "", "--ball-speed", "1"), "--table: needs a preset"),
+                (("shot", "simulate", "--rack", "", "--ball-speed", "1"), "--rack: needs a rack"),
+                (STRAIGHT_SHOT + ("--ball", "cue@0.5,0.3"), "--ball: cue given twice"),
+                (("table", "create", "--seat-names", "ann,bob,ann"), "--seat-names: 'ann' given "
+                                                                     "twice"),
+                (("swing", "create", "--seat-names", "a,a"), "--seat-names: 'a' given twice"),
+        ):
+            self.assert_usage(args, message)
+        r = cli(self.server.address, "--format", "json", "table", "list", "--page-size", "0")
+        self.assertEqual(r.returncode, 0, r.stderr)
+
+    def test_messages_name_the_flags(self):
+        # An empty rack without the struck ball: the CLI says which flag places it.
+        self.assert_usage(("shot", "simulate", "--rack", "empty", "--ball-speed", "5"),
+                          "--rack empty: no cue ball to strike: place it with --ball cue@X,Y")
+        # The server's field names come with the flags that set them.
+        r = cli(self.server.address, "shot", "simulate", "--rack", "9ball", "--strike-ball",
+                "15", "--ball-speed", "1")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("strike.ball (--strike-ball)", r.stderr)
+        self.assertIn("table.balls (--ball)", r.stderr)
+        # A ball launched downward lands at once: exit 0, but a note says why the carry is 0.
+        r = cli(self.server.address, "flight", "simulate", "--ball-speed", "50", "--launch-deg",
+                "-10", "--spin-rpm", "3000")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("carry 0.00 m", r.stdout)
+        self.assertIn("sportsim: note: the ball landed at launch", r.stderr)
+        r = cli(self.server.address, "flight", "simulate", "--ball-speed", "50", "--launch-deg",
+                "10", "--spin-rpm", "3000")
+        self.assertEqual(r.stderr, "")
+
+    def test_formats_and_negative_zero(self):
+        self.assert_usage(("--format", "jsonl", *STRAIGHT_SHOT), "--format jsonl: shot simulate")
+        self.assert_usage(("--format", "jsonl", "info"), "--format jsonl: info")
+        self.assert_usage(("--format", "csv", "info"), "--format csv: info has no csv form")
+        negative_zero = re.compile(r"(?<![\w.])-0(?![\d.eE])")
+        for args in (STRAIGHT_SHOT + ("--phi", "-0", "--a", "-0", "--sample-rate", "50"),
+                     ("flight", "simulate", "--ball-speed", "50", "--launch-deg", "20",
+                      "--spin-rpm", "3000", "--spin-axis-deg", "-0",
+                      "--launch-direction-deg", "-0"),
+                     ("swing", "simulate", "--club", "7-iron", "--face-angle-deg", "-0")):
+            for fmt in ("json", "csv"):
+                r = cli(self.server.address, "--format", fmt, *args)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                self.assertIsNone(negative_zero.search(r.stdout), (fmt, args))
+        # Physics events carry no game keys.
+        r = cli(self.server.address, "--format", "json", *STRAIGHT_SHOT)
+        for e in json.loads(r.stdout)["events"]:
+            for key in ("reason", "points", "choices"):
+                self.assertNotIn(key, e)
+
+    def test_flight_svg_has_equal_scales_and_axes(self):
+        args = ("flight", "simulate", "--ball-speed", "70", "--launch-deg", "12", "--spin-rpm",
+                "2800")
+        flight = json.loads(cli(self.server.address, "--format", "json", *args).stdout)
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "flight.svg")
+            r = cli(self.server.address, *args, "--svg", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            root = ET.parse(path).getroot()
+        side = root.findall(".//" + SVG_NS + "polyline")[0].get("points").split()
+        pts = [tuple(map(float, p.split(","))) for p in side]
+        samples = flight["samples"]
+        apex = max(range(len(samples)), key=lambda i: samples[i]["z_m"])
+        across = (pts[apex][0] - pts[0][0]) / samples[apex]["x_m"]
+        up = (pts[0][1] - pts[apex][1]) / samples[apex]["z_m"]
+        self.assertAlmostEqual(across / up, 1.0, delta=0.02)  # one scale both ways
+        labels = [t.text for t in root.iter(SVG_NS + "text")]
+        self.assertIn("m", labels)
+        self.assertIn("yd", labels)
+        self.assertTrue(any(t.endswith(" m") and t[:-2].replace(".", "").isdigit()
+                            for t in labels), labels)  # height ticks
+        self.assertGreaterEqual(sum(1 for t in labels if t.isdigit()), 8)  # downrange ticks
+
     def test_unreachable_server(self):
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
@@ -359,6 +538,66 @@ class TablesAgainstServer(unittest.TestCase):
         r = cli(self.server.address, "table", "get", table)
         self.assertEqual(r.returncode, 5, r.stderr)
         self.assertIn("NOT_FOUND", r.stderr)
+
+    def test_tokens_only_where_they_are_given(self):
+        created = self.cli_json("table", "create", *QUICK_TABLE)
+        self.assertTrue(all(s["token"] for s in created["seats"]))
+        info = self.cli_json("table", "get", created["table_id"])
+        self.assertEqual([s["seat"] for s in info["seats"]], [0, 1])
+        for seat in info["seats"]:
+            self.assertNotIn("token", seat)  # no empty "token": "" per seat
+
+    def test_until_rest_at_rest_waits_for_the_next_shot(self):
+        created = self.cli_json("table", "create", *QUICK_TABLE, "--tick-hz", "240")
+        table, token = created["table_id"], created["seats"][0]["token"]
+        r = cli(self.server.address, "table", "watch", "--help")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("end of the next shot", r.stdout)
+        watch = subprocess.Popen([CLI, "--server", self.server.address, "--format", "jsonl",
+                                  "table", "watch", table, "--until-rest"],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        first = json.loads(watch.stdout.readline())
+        self.assertTrue(first["at_rest"])
+        time.sleep(0.3)
+        self.assertIsNone(watch.poll())  # at rest: still waiting for a shot
+        self.cli_json("table", "shoot", table, "--token", token, *QUICK_BREAK)
+        out, err = watch.communicate(timeout=60)
+        self.assertEqual(watch.returncode, 0, err)
+        kinds = [e["kind"] for line in out.splitlines() for e in json.loads(line)["events"]]
+        self.assertIn("shot_end", kinds)
+
+    def test_rack_labels_do_not_overlap(self):
+        # A 9-ball rack barely touched: its labels sit inside their balls, not on their
+        # neighbours.
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "rack.svg")
+            r = cli(self.server.address, "shot", "simulate", "--rack", "9ball", "--ball-speed",
+                    "0.2", "--svg", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            root = ET.parse(path).getroot()
+        # Each final ball is a filled circle followed by its label.
+        ids = {"cue"} | {str(i) for i in range(1, 10)}
+        balls, labels = [], []
+        children = list(root)
+        for i, el in enumerate(children):
+            if el.tag != SVG_NS + "text" or (el.text or "") not in ids:
+                continue
+            c = children[i - 1]
+            self.assertEqual(c.tag, SVG_NS + "circle")
+            balls.append((float(c.get("cx")), float(c.get("cy")), float(c.get("r"))))
+            fs, x, y = float(el.get("font-size")), float(el.get("x")), float(el.get("y"))
+            w = len(el.text) * 0.6 * fs
+            left = x - w / 2 if el.get("text-anchor") == "middle" else x
+            labels.append((left, left + w, y - 0.7 * fs, y))
+        self.assertEqual(len(labels), 10)
+        # No label covers another ball (racked balls touch: a label beside its ball would).
+        for i, (x0, x1, y0, y1) in enumerate(labels):
+            for j, (cx, cy, r) in enumerate(balls):
+                if i == j:
+                    continue
+                dx = max(x0 - cx, 0, cx - x1)
+                dy = max(y0 - cy, 0, cy - y1)
+                self.assertGreater(dx * dx + dy * dy, r * r, (i, j, labels[i], balls[j]))
 
     def test_watch_text_and_svg(self):
         created = self.cli_json("table", "create", *QUICK_TABLE, "--tick-hz", "240")
@@ -494,6 +733,14 @@ class GamesAgainstServer(unittest.TestCase):
         self.assertEqual(len(fouls), 1, [e["kind"] for s in snaps for e in s["events"]])
         self.assertEqual(fouls[0]["seat"], 0)
         self.assertTrue(fouls[0]["reason"])
+        self.assertIn("points", fouls[0])  # a game event keeps its game keys, zero or not
+        # Physics and table events leave the game keys out (they never fill them).
+        others = [e for s in snaps for e in s["events"] if e["kind"] in EVENT_KINDS | {
+            "shot", "shot_end", "turn"}]
+        self.assertTrue(others)
+        for e in others:
+            for key in ("reason", "points", "choices"):
+                self.assertNotIn(key, e, e)
         info = self.cli_json("table", "get", table)
         verdict = info["last_shot"]["verdict"]
         self.assertTrue(verdict["foul"])
@@ -678,9 +925,12 @@ class SessionsAgainstServer(unittest.TestCase):
         # refused and reported on stderr; the swing goes on with the chapter's torques.
         r = self.drive(session, token, "# t_s,qalpha_nm,qbeta_nm\n" + CHAPTER_DRIVE +
                        "\n0.05,100,0\n0.2,nan,0\n")
-        self.assertEqual(r.returncode, 0, r.stderr)
+        # Some commands refused: exit 65 with the count (the first line is the start's
+        # torques, not a command).
+        self.assertEqual(r.returncode, 65, r.stderr)
         self.assertIn("refused: OUT_OF_RANGE", r.stderr)
         self.assertIn("refused: INVALID_ARGUMENT", r.stderr)
+        self.assertIn("sportsim: 2 of 3 commands refused", r.stderr)
         lines = [json.loads(line) for line in r.stdout.splitlines()]
         impacts = [line["impact"] for line in lines if "impact" in line]
         self.assertEqual(impacts, [self.simulated_impact()])
@@ -717,6 +967,52 @@ class SessionsAgainstServer(unittest.TestCase):
         self.assertEqual(started["swing_id"], 1)
         r = cli(self.server.address, "swing", "create", "--profile", "heroic")
         self.assertEqual(r.returncode, 64, r.stderr)
+
+    def test_create_with_club_launches_a_ball_at_each_impact(self):
+        session, token = self.create("--club", "7-iron")
+        watch, first = self.start_watch(session, "--until-impact")
+        self.cli_json("swing", "start", session, "--token", token)
+        try:
+            out, err = watch.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            watch.kill()
+            raise
+        self.assertEqual(watch.returncode, 0, err)
+        lines = [json.loads(line) for line in first + out.splitlines() if line.strip()]
+        impacts = [e for line in lines for e in line.get("events", [])
+                   if e["kind"] == "SWING_EVENT_IMPACT"]
+        self.assertEqual(len(impacts), 1)
+        ball = impacts[0]["ball"]
+        self.assertEqual(ball["club"], "7-iron")
+        self.assertFalse(ball["error"])
+        self.assertGreater(ball["flight"]["carry_m"], 100)
+        # The same ball as swing simulate --club gives for the same swing.
+        simulated = self.cli_json("swing", "simulate", "--club", "7-iron")["ball"]
+        self.assertEqual(ball["launch"], simulated["launch"])
+        # The ball's flags mean nothing without --club.
+        r = cli(self.server.address, "swing", "create", "--face-angle-deg", "2")
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn("--face-angle-deg: describes the ball: give --club too", r.stderr)
+
+    def test_swing_svg_text_fits(self):
+        session, token = self.create()
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "swing.svg")
+            r = subprocess.run([CLI, "--server", self.server.address, "swing", "drive", session,
+                                "--token", token, "--svg", path],
+                               input=CHAPTER_DRIVE, capture_output=True, text=True, timeout=10)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            root = ET.parse(path).getroot()
+        width = float(root.get("width"))
+        texts = list(root.iter(SVG_NS + "text"))
+        self.assertGreaterEqual(len(texts), 4)
+        for t in texts:
+            # A generous width per character (sans-serif averages ~0.55 em).
+            w = len(t.text) * 0.6 * float(t.get("font-size"))
+            x = float(t.get("x"))
+            left, right = (x - w, x) if t.get("text-anchor") == "end" else (x, x + w)
+            self.assertGreaterEqual(left, 0, t.text)
+            self.assertLessEqual(right, width, t.text)
 
     def test_list_reset_delete(self):
         created = self.cli_json("swing", "create", "--seats", "2", "--tick-hz", "200")

@@ -66,6 +66,28 @@ bool SameBits(const TableState& a, const TableState& b) {
 // PHYSICS.md's tunnelling pitfall: 13 m/s at a 1/120 s step moves the ball 108 mm per step,
 // more than the 76 mm chord through a ball hit at an offset of 1.5 R. Without CCD some phases
 // of the step grid jump straight through; with CCD every phase collides.
+// The engine can leave a ball at rest on a pocket's lip, between the jaws and beyond the rail
+// line (seen on the snooker table's side pocket); such a table must stay playable, while a
+// ball beyond a rail away from any pocket, or inside a jaw, is still refused.
+TEST(LayoutTest, ABallRestingInAPocketMouthIsOnTheTable) {
+  const TableModel m = Model("snooker");
+  const double lim_y = 0.5 * m.spec().width_m - m.cushion_contact_distance();
+  const Eigen::Vector2d lip(0.0248573, -0.870082);  // past the rail line, between the jaws
+  ASSERT_GT(std::abs(lip.y()), lim_y);
+  EXPECT_TRUE(InPocketMouth(m, lip));
+  TableState on_lip{.balls = {BallAt("red1", lip.x(), lip.y(), m), BallAt("cue", 0.5, 0, m)}};
+  EXPECT_TRUE(ValidateLayout(m, on_lip).ok()) << ValidateLayout(m, on_lip);
+  TableState beyond_rail{.balls = {BallAt("red1", 0.6, lip.y(), m)}};
+  EXPECT_FALSE(InPocketMouth(m, Eigen::Vector2d(0.6, lip.y())));
+  EXPECT_THAT(ValidateLayout(m, beyond_rail).message(), HasSubstr("not on the cloth"));
+  // In the jaw: near the pocket but within a radius of a jaw segment.
+  for (const CushionSegment& c : m.spec().cushions) {
+    if (c.name.find("jaw") == std::string::npos) continue;
+    const Eigen::Vector2d mid = 0.5 * (c.a + c.b);
+    EXPECT_FALSE(InPocketMouth(m, mid)) << c.name;
+  }
+}
+
 TEST(SteppedEngineTest, CcdStopsTunnellingAt13MpsAndOneTwentiethSecondSteps) {
   const TableModel m = Model("unbounded");
   const double r = m.radius();
