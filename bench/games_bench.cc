@@ -175,12 +175,14 @@ BotShot ChooseShot(const Referee& ref, const Rules& rules, const TableModel& m, 
   return out;
 }
 
-/// Moves every ball on the table that lies outside the rectangle ValidateLayout (cue.cc) accepts
-/// back onto its edge; returns how many moved. The engine can leave a ball at rest in a corner
-/// pocket's jaw, a fraction of a millimetre beyond |x| <= L/2 - contact distance (inside the
-/// cushion segments of the jaw), and ApplyStrike then refuses the whole layout; a real player
-/// would just play the ball, so the bot nudges it (counted: nudges).
+/// When ValidateLayout (cue.cc) refuses the table, moves every ball outside the rectangle it
+/// checks back onto its edge; returns how many moved. Before 77151c9 the engine could leave a
+/// ball at rest in a corner pocket's mouth, a fraction of a millimetre beyond |x| <= L/2 -
+/// contact distance, and ApplyStrike refused the whole layout; a real player would just play
+/// the ball, so the bot nudges it (counted: nudges). Since 77151c9 ValidateLayout accepts a
+/// ball in a pocket's mouth, so this should do nothing.
 int Nudge(const TableModel& m, TableState* s) {
+  if (billiards::ValidateLayout(m, *s).ok()) return 0;
   const double lim_x = 0.5 * m.spec().length_m - m.cushion_contact_distance() - 1e-7;
   const double lim_y = 0.5 * m.spec().width_m - m.cushion_contact_distance() - 1e-7;
   int moved = 0;

@@ -44,6 +44,14 @@ ABSL_FLAG(int, max_catchup_ticks, 12,
           "A table further behind its clock than this slips (runs slower than real time) instead "
           "of racing to catch up");
 ABSL_FLAG(int, event_log, 512, "Events each table keeps for watchers resuming with from_sequence");
+ABSL_FLAG(std::string, http_listen, "",
+          "host:port for gRPC-Web (browsers) and the viewer; empty: off");
+ABSL_FLAG(std::string, web_root, sportsim::server::kDefaultWebRoot,
+          "Directory of the viewer's built files, served at /");
+ABSL_FLAG(std::vector<std::string>, http_cors_origins, {},
+          "Origins allowed to call gRPC-Web from another origin (comma-separated; * for any)");
+ABSL_FLAG(int, http_max_streams_per_client, 4,
+          "Open gRPC-Web server streams per client address");
 ABSL_FLAG(int, sim_workers, 0,
           "Threads computing simulations (SimulateShot, SimulateSwing, SimulateFlight, "
           "StartSwing), apart from gRPC's and the tick workers, at a lower priority; 0: one "
@@ -115,6 +123,10 @@ int main(int argc, char** argv) {
               << absl::FormatDuration(grace) << "\n";
     return 2;
   }
+  config.http_listen = absl::GetFlag(FLAGS_http_listen);
+  config.web_root = absl::GetFlag(FLAGS_web_root);
+  config.http_cors_origins = absl::GetFlag(FLAGS_http_cors_origins);
+  config.http_max_streams_per_client = absl::GetFlag(FLAGS_http_max_streams_per_client);
   config.work.workers = absl::GetFlag(FLAGS_sim_workers);
   config.work.max_queued = absl::GetFlag(FLAGS_max_queued_simulations);
   config.work.cpu_budget = absl::GetFlag(FLAGS_max_request_cpu);
@@ -134,6 +146,7 @@ int main(int argc, char** argv) {
                 {"max_watchers_per_table", config.tables.world.max_watchers, 1, 100000},
                 {"tick_workers", config.tick_workers, 0, 256},
                 {"sim_workers", config.work.workers, 0, 256},
+                {"http_max_streams_per_client", config.http_max_streams_per_client, 1, 64},
                 {"max_queued_simulations", config.work.max_queued, 0, 100000},
                 {"max_catchup_ticks", config.tables.world.max_catchup_ticks, 1, 100000},
                 {"event_log", config.tables.world.event_log, 1, 10000000},
@@ -164,6 +177,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::cout << "sportsim-server listening on " << (*app)->address() << std::endl;
+  if ((*app)->http_port() != 0) {
+    std::cout << "sportsim-server gRPC-Web and viewer on port " << (*app)->http_port()
+              << std::endl;
+  }
   if ((*app)->metrics_port() != 0) {
     std::cout << "sportsim-server metrics on port " << (*app)->metrics_port() << " (/metrics)"
               << std::endl;

@@ -98,6 +98,11 @@ absl::StatusOr<ListenAddress> ParseListenAddress(std::string_view address) {
   return out;
 }
 
+#ifndef SPORTSIM_WEB_ROOT
+#define SPORTSIM_WEB_ROOT ""
+#endif
+const char* const kDefaultWebRoot = SPORTSIM_WEB_ROOT;
+
 namespace {
 
 std::atomic<int64_t> protobuf_log_messages{0};
@@ -154,7 +159,8 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->pool_ = std::make_unique<WorkPool>(config.work);
   app->services_.push_back(MakeSwingService(app->sessions_.get(), app->pool_.get()));
   app->services_.push_back(MakeBilliardsService(app->tables_.get(), app->pool_.get(),
-                                                config.max_send_message_bytes));
+                                                config.max_send_message_bytes,
+                                                absl::ToDoubleSeconds(config.work.cpu_budget)));
 
   app->rpc_counters_ = std::make_unique<RpcCounters>();
   if (!config.metrics_listen.empty()) {
@@ -193,6 +199,23 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   if (app->server_ == nullptr || app->port_ == 0) {
     return absl::UnavailableError(absl::StrFormat("cannot listen on %s", target));
   }
+  if (!config.http_listen.empty()) {
+    grpc::ChannelArguments args;
+    args.SetMaxReceiveMessageSize(config.max_send_message_bytes);
+    args.SetMaxSendMessageSize(config.max_receive_message_bytes);
+    absl::StatusOr<std::unique_ptr<GrpcWebGateway>> web = GrpcWebGateway::Start(
+        GrpcWebConfig{.listen = config.http_listen,
+                      .web_root = config.web_root,
+                      .cors_origins = config.http_cors_origins,
+                      .max_request_bytes = config.max_receive_message_bytes,
+                      .max_streams_per_client = config.http_max_streams_per_client},
+        app->server_->InProcessChannel(args));
+    if (!web.ok()) {
+      app->server_->Shutdown();
+      return web.status();
+    }
+    app->web_ = *std::move(web);
+  }
   app->server_->GetHealthCheckService()->SetServingStatus(true);
   return app;
 }
@@ -203,6 +226,8 @@ ServerApp::~ServerApp() {
   // No wake may reach a registry being destroyed.
   if (scheduler_ != nullptr) scheduler_->Stop();
 }
+
+int ServerApp::http_port() const { return web_ != nullptr ? web_->port() : 0; }
 
 int ServerApp::metrics_port() const { return metrics_ != nullptr ? metrics_->port() : 0; }
 
@@ -216,6 +241,7 @@ void ServerApp::Shutdown(absl::Duration grace) {
   server_->GetHealthCheckService()->SetServingStatus(false);
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
   sessions_->Shutdown(absl::UnavailableError("the server is shutting down"));
+  if (web_ != nullptr) web_->Shutdown();
   scheduler_->Stop();
   // Queued simulations end now (UNAVAILABLE); running ones get the grace, then stop at their
   // next poll. Then the calls still open get what is left of the grace.

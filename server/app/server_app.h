@@ -11,6 +11,7 @@
 #include "absl/status/statusor.h"
 #include "absl/time/time.h"
 #include "server/app/metrics.h"
+#include "server/rpc/grpc_web.h"
 #include "server/swing/session_world.h"
 #include "server/world/work_pool.h"
 #include "server/billiards/table_world.h"
@@ -21,6 +22,9 @@ class Service;
 }  // namespace grpc
 
 namespace sportsim::server {
+
+/// Where the build puts the viewer's files.
+extern const char* const kDefaultWebRoot;
 
 struct ServerConfig {
   std::string listen = "127.0.0.1:50051";  ///< host:port ([v6]:port); port 0 = any free port
@@ -38,6 +42,11 @@ struct ServerConfig {
   absl::Duration min_client_ping_interval = absl::Seconds(10);   ///< --min_client_ping_interval
   TableLimits tables;
   SessionLimits sessions;
+  /// gRPC-Web and the viewer: listen address ("" = off), files, allowed origins.
+  std::string http_listen;
+  std::string web_root = kDefaultWebRoot;
+  std::vector<std::string> http_cors_origins;
+  int http_max_streams_per_client = 4;
   WorkLimits work;  ///< the simulation pool (--sim_workers, --max_queued_simulations,
                     ///< --max_request_cpu)
 };
@@ -66,6 +75,8 @@ class ServerApp {
   ~ServerApp();
 
   int port() const { return port_; }
+  /// The gRPC-Web port, or 0 when off.
+  int http_port() const;
   /// The /metrics port, or 0 when metrics are off.
   int metrics_port() const;
   TableRegistry& tables() { return *tables_; }
@@ -90,6 +101,7 @@ class ServerApp {
   std::unique_ptr<MetricsEndpoint> metrics_;    // goes before the registries it reads
   std::vector<std::unique_ptr<grpc::Service>> services_;
   std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<GrpcWebGateway> web_;  // goes before the server its channel calls
   std::string host_;
   int port_ = 0;
   std::atomic<bool> shut_down_{false};

@@ -86,15 +86,8 @@ v1::TableEvent TableEvent(v1::EventKind kind, double t_s, uint64_t shot_id) {
 // A table that plays a ruled game (a referee decides what every shot means).
 bool Ruled(const Table& t) { return t.game_referee != nullptr; }
 
-// The seed of shot n's noise, from the table's secret seed: SplitMix64's finalizer (Steele,
-// Lea & Flood, "Fast splittable pseudorandom number generators", OOPSLA 2014) over
-// seed + n * golden ratio, so that consecutive shots get unrelated seeds.
-uint64_t ShotSeed(uint64_t seed, uint64_t shot) {
-  uint64_t z = seed + shot * 0x9E3779B97F4A7C15ull;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
+// The seed of shot n's noise, from the table's secret seed.
+uint64_t ShotSeed(uint64_t seed, uint64_t shot) { return DeriveSeed(seed, shot); }
 
 // The ball a seat strikes: its own cue ball (three-cushion: seat 0 "cue", seat 1 "yellow").
 std::string StrikerBall(const Table& t, int seat) {
@@ -473,6 +466,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   }
   table->initial = build->state;
   table->create_request = request.SerializeAsString();
+  table->aim_lines = !request.has_aim_lines() || request.aim_lines();
   v1::CreateTableResponse response;
   table->seats = *std::move(seats);
   table->admin_token = RandomHex(16);
@@ -992,6 +986,59 @@ absl::StatusOr<v1::MatchRecord> TableRegistry::GetMatchRecord(
   }
   *out.mutable_game() = *t.game_view;
   return out;
+}
+
+absl::StatusOr<PreviewJob> TableRegistry::PreparePreview(const v1::PreviewShotRequest& request) {
+  if (request.max_events() > kMaxPreviewEvents) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "max_events must be in [0, %d] (0: %d), got %d", kMaxPreviewEvents, kMaxPreviewEvents,
+        request.max_events()));
+  }
+  if (!request.has_strike()) return absl::InvalidArgumentError("strike: required");
+  if (request.strike().noise() != 0 || request.strike().seed() != 0) {
+    return absl::InvalidArgumentError("strike.noise, strike.seed: a preview has no noise");
+  }
+  absl::StatusOr<b::CueStrike> strike = StrikeFromProto(request.strike());
+  if (!strike.ok()) return strike.status();
+  return host_.Act<PreviewJob>(
+      request.table_id(), request.token(),
+      [&](const std::shared_ptr<Table>& ptr, int seat,
+          Table::Pump& /*pump*/) -> absl::StatusOr<PreviewJob> {
+    Table& t = *ptr;
+    if (!t.aim_lines) {
+      return absl::FailedPreconditionError(
+          "aim lines are off on this table (CreateTableRequest.aim_lines)");
+    }
+    absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/true);
+    if (!acting.ok()) return acting.status();
+    if (t.sim != nullptr) {
+      return absl::FailedPreconditionError("balls are still moving: preview when they are at rest");
+    }
+    if (Ruled(t) && (t.game.match_over() || t.game.decision.pending())) {
+      return absl::FailedPreconditionError("no shot to preview: the match is over or a decision "
+                                           "is pending");
+    }
+    const std::string id = Ruled(t)                         ? StrikerBall(t, *acting)
+                           : request.strike().ball().empty() ? "cue"
+                                                             : request.strike().ball();
+    if (Ruled(t) && !request.strike().ball().empty() && request.strike().ball() != id) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "strike.ball: seat %d strikes only its own cue ball \"%s\"", *acting, id));
+    }
+    PreviewJob job;
+    job.cue = t.rest.Find(id);
+    if (job.cue < 0 || t.rest.balls[job.cue].state == b::MotionState::kPocketed) {
+      return absl::FailedPreconditionError(
+          absl::StrFormat("strike.ball: ball %s is not on the table", Quote(id)));
+    }
+    job.model = t.model;
+    job.solver = t.solver;
+    job.balls = t.rest;
+    job.strike = *strike;
+    job.max_events = request.max_events() == 0 ? kMaxPreviewEvents
+                                               : static_cast<int>(request.max_events());
+    return job;
+  });
 }
 
 absl::StatusOr<std::shared_ptr<Watcher>> TableRegistry::Watch(

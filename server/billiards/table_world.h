@@ -27,6 +27,7 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "server/billiards/preview.h"
 #include "server/world/scheduler.h"
 #include "server/world/watcher.h"
 #include "server/world/world_host.h"
@@ -148,6 +149,7 @@ struct TableKind {
     double noise = 0.0;                           ///< ruled games: on every strike
     uint64_t seed = 0;                            ///< the noise's; secret until the match ends
     std::string create_request;                   ///< CreateTableRequest as asked (serialized)
+    bool aim_lines = true;                        ///< PreviewShot allowed
     // Guarded by mu.
     uint32_t turn = 0;
     billiards::TableState rest;                            ///< the balls when no shot moves
@@ -210,6 +212,9 @@ class TableRegistry {
   absl::StatusOr<v1::DecideResponse> Decide(const v1::DecideRequest& request);
   absl::StatusOr<v1::ConcedeResponse> Concede(const v1::ConcedeRequest& request);
   absl::StatusOr<v1::MatchRecord> GetMatchRecord(const v1::GetMatchRecordRequest& request);
+  /// PreviewShot's checks and a copy of the table's balls for RunPreview (preview.h): the seat
+  /// to play, every ball at rest, aim lines allowed. Changes nothing.
+  absl::StatusOr<PreviewJob> PreparePreview(const v1::PreviewShotRequest& request);
 
   /// Registers a watcher writing to `sink` and queues its first snapshot; the caller then calls
   /// Pump() on it. With a null sink, the caller Attach()es one before pumping (nothing is

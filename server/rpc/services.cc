@@ -3,12 +3,16 @@
 #include <google/protobuf/stubs/common.h>
 #include <grpcpp/grpcpp.h>
 
+#include <atomic>
 #include <chrono>
+#include <map>
 #include <optional>
 
 #include "absl/strings/match.h"
 
+#include "server/billiards/batch.h"
 #include "server/billiards/convert.h"
+#include "server/billiards/preview.h"
 #include "server/billiards/game_convert.h"
 #include "server/rpc/status.h"
 #include "server/world/work_pool.h"
@@ -332,15 +336,156 @@ class SwingService final : public v1::Swing::CallbackService {
   }
 };
 
+// SimulateShots: a batch's outcomes computed in chunks on the simulation pool (every core),
+// streamed in request order, one chunk a message. At most a few chunks wait or run at once,
+// so memory stays bounded whatever the batch's size; the batch's CPU (all chunks together) is
+// held to --max_request_cpu; cancellation and the deadline stop the chunks at their next poll.
+// The stream is finished only once no chunk is running and no write is in flight, so nothing
+// touches the reactor after it is done.
+class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResponse> {
+ public:
+  BatchReactor(WorkPool* pool, grpc::CallbackServerContext* ctx,
+               const v1::SimulateShotsRequest& request, double cpu_budget_s)
+      : pool_(pool), ctx_(ctx), cpu_budget_s_(cpu_budget_s) {
+    absl::StatusOr<BatchJob> job = BatchJobFromProto(request);
+    if (!job.ok()) {
+      Finish(ToGrpcStatus(job.status()));
+      return;
+    }
+    job_ = std::make_shared<const BatchJob>(*std::move(job));
+    // Outcomes with every event are large: one a message.
+    chunk_ = job_->outcome == v1::SHOT_OUTCOME_EVENTS ? 1 : 32;
+    chunks_ = (job_->size() + chunk_ - 1) / chunk_;
+    absl::MutexLock lock(&mu_);
+    Pump();
+  }
+
+  void OnWriteDone(bool ok) override {
+    absl::MutexLock lock(&mu_);
+    writing_ = false;
+    if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
+    Pump();
+  }
+  void OnCancel() override {
+    absl::MutexLock lock(&mu_);
+    if (error_.ok()) error_ = absl::CancelledError("the call was cancelled");
+    Pump();
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  // Submits chunks while few are outstanding, writes the next chunk in order when it is
+  // ready, and finishes when all is written (or on an error once nothing runs).
+  void Pump() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (finished_) return;
+    while (error_.ok() && next_submit_ < chunks_ &&
+           outstanding_ < std::max(2, 2 * pool_->workers())) {
+      const int64_t c = next_submit_++;
+      ++outstanding_;
+      absl::Status queued = pool_->Submit(
+          [this, c](const WorkControl& control) { Run(c, control); },
+          [this](const absl::Status& dropped) {
+            absl::MutexLock lock(&mu_);
+            --outstanding_;
+            if (error_.ok()) error_ = dropped;
+            Pump();
+          },
+          [this] { return ctx_->IsCancelled(); }, DeadlineOf(ctx_));
+      if (!queued.ok()) {
+        --outstanding_;
+        error_ = queued;
+      }
+    }
+    if (!writing_ && error_.ok()) {
+      auto it = ready_.find(next_write_);
+      if (it != ready_.end()) {
+        out_ = std::move(it->second);
+        ready_.erase(it);
+        ++next_write_;
+        writing_ = true;
+        StartWrite(&out_);
+        return;
+      }
+    }
+    const bool all_written = next_write_ == chunks_;
+    if (!writing_ && outstanding_ == 0 && (all_written || !error_.ok())) {
+      finished_ = true;
+      Finish(ToGrpcStatus(error_));
+    }
+  }
+
+  // One chunk on a worker: outcomes [c * chunk_, ...), each polling the call and the batch's
+  // CPU budget between events.
+  void Run(int64_t c, const WorkControl& control) {
+    v1::SimulateShotsResponse response;
+    const int64_t first = c * chunk_;
+    const int64_t last = std::min(job_->size(), first + chunk_);
+    absl::Status stopped;
+    const double cpu0 = control.CpuSeconds();
+    const auto stop = [&] {
+      if (!control.ShouldStop() &&
+          cpu_used_.load(std::memory_order_relaxed) + (control.CpuSeconds() - cpu0) <=
+              cpu_budget_s_) {
+        return false;
+      }
+      return true;
+    };
+    for (int64_t n = first; n < last && stopped.ok(); ++n) {
+      if (stop()) {
+        stopped = control.Check();
+        if (stopped.ok()) {
+          stopped = absl::ResourceExhaustedError(absl::StrFormat(
+              "the batch used its CPU budget of %g s (--max_request_cpu) after %d outcomes: "
+              "send fewer strikes or samples per call",
+              cpu_budget_s_, n));
+          pool_->CountBudgetExhausted();
+        }
+        break;
+      }
+      ComputeOutcome(*job_, n, stop, response.add_outcomes());
+    }
+    const double used = control.CpuSeconds() - cpu0;
+    absl::MutexLock lock(&mu_);
+    cpu_used_.store(cpu_used_.load(std::memory_order_relaxed) + used, std::memory_order_relaxed);
+    --outstanding_;
+    if (!stopped.ok()) {
+      if (error_.ok()) error_ = stopped;
+    } else {
+      ready_.emplace(c, std::move(response));
+    }
+    Pump();
+  }
+
+  WorkPool* const pool_;
+  grpc::CallbackServerContext* const ctx_;
+  const double cpu_budget_s_;
+  std::shared_ptr<const BatchJob> job_;
+  int64_t chunk_ = 1;
+  int64_t chunks_ = 0;
+  std::atomic<double> cpu_used_{0.0};
+  absl::Mutex mu_;
+  int64_t next_submit_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t next_write_ ABSL_GUARDED_BY(mu_) = 0;
+  int outstanding_ ABSL_GUARDED_BY(mu_) = 0;
+  bool writing_ ABSL_GUARDED_BY(mu_) = false;
+  bool finished_ ABSL_GUARDED_BY(mu_) = false;
+  absl::Status error_ ABSL_GUARDED_BY(mu_);
+  std::map<int64_t, v1::SimulateShotsResponse> ready_ ABSL_GUARDED_BY(mu_);
+  v1::SimulateShotsResponse out_;  // the message being written
+};
+
 class BilliardsService final : public v1::Billiards::CallbackService {
  public:
-  BilliardsService(TableRegistry* tables, WorkPool* pool, int64_t max_reply_bytes)
-      : tables_(tables), pool_(pool), max_reply_bytes_(max_reply_bytes) {}
+  BilliardsService(TableRegistry* tables, WorkPool* pool, int64_t max_reply_bytes,
+                   double cpu_budget_s)
+      : tables_(tables), pool_(pool), max_reply_bytes_(max_reply_bytes),
+        cpu_budget_s_(cpu_budget_s) {}
 
  private:
   TableRegistry* const tables_;
   WorkPool* const pool_;
   const int64_t max_reply_bytes_;
+  const double cpu_budget_s_;
 
   grpc::ServerUnaryReactor* CreateTable(grpc::CallbackServerContext* ctx,
                                         const v1::CreateTableRequest* request,
@@ -384,6 +529,21 @@ class BilliardsService final : public v1::Billiards::CallbackService {
                                     const v1::SetTurnRequest* request,
                                     v1::SetTurnResponse* response) override {
     return Unary(ctx, response, [&] { return tables_->SetTurn(*request); });
+  }
+  grpc::ServerWriteReactor<v1::SimulateShotsResponse>* SimulateShots(
+      grpc::CallbackServerContext* ctx, const v1::SimulateShotsRequest* request) override {
+    return new BatchReactor(pool_, ctx, *request, cpu_budget_s_);
+  }
+  grpc::ServerUnaryReactor* PreviewShot(grpc::CallbackServerContext* ctx,
+                                        const v1::PreviewShotRequest* request,
+                                        v1::PreviewShotResponse* response) override {
+    // The table's state is copied under its lock at once; the simulation runs on the pool.
+    absl::StatusOr<PreviewJob> job = tables_->PreparePreview(*request);
+    if (!job.ok()) return Finished(ctx, job.status());
+    auto shared = std::make_shared<PreviewJob>(*std::move(job));
+    return Pooled(pool_, ctx, [shared, response](const WorkControl& control) {
+      return RunPreview(*shared, [&control] { return control.ShouldStop(); }, response);
+    });
   }
   grpc::ServerUnaryReactor* Decide(grpc::CallbackServerContext* ctx,
                                    const v1::DecideRequest* request,
@@ -464,8 +624,9 @@ std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkP
   return std::make_unique<SwingService>(sessions, pool);
 }
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
-                                                    int64_t max_reply_bytes) {
-  return std::make_unique<BilliardsService>(tables, pool, max_reply_bytes);
+                                                    int64_t max_reply_bytes,
+                                                    double cpu_budget_s) {
+  return std::make_unique<BilliardsService>(tables, pool, max_reply_bytes, cpu_budget_s);
 }
 
 }  // namespace sportsim::server

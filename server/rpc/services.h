@@ -24,7 +24,8 @@ std::unique_ptr<grpc::Service> MakeInfoService();
 std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkPool* pool);
 /// Billiards: SimulateShot (on `pool`) and the tables of `tables`. Both must outlive it.
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
-                                                    int64_t max_reply_bytes);
+                                                    int64_t max_reply_bytes,
+                                                    double cpu_budget_s);
 
 }  // namespace sportsim::server
 

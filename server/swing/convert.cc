@@ -267,6 +267,21 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
       return absl::InvalidArgumentError(
           absl::StrFormat("aero_fit: unknown fit %d", static_cast<int>(r.aero_fit())));
   }
+  switch (r.integrator()) {
+    case v1::SWING_INTEGRATOR_UNSPECIFIED:
+    case v1::SWING_INTEGRATOR_RK4: job.options.integrator = ode::Integrator::kRk4; break;
+    case v1::SWING_INTEGRATOR_DP45: job.options.integrator = ode::Integrator::kDp45; break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "integrator: a flight is integrated by rk4 or dp45, got %d",
+          static_cast<int>(r.integrator())));
+  }
+  if (r.has_tolerance()) job.options.accuracy.tolerance = r.tolerance();
+  if (r.has_max_step_s()) job.options.accuracy.max_step_s = r.max_step_s();
+  if (job.options.integrator == ode::Integrator::kDp45 && r.has_dt_s()) {
+    return absl::InvalidArgumentError(
+        "dt_s does not apply to dp45 (an error-controlled integrator): set tolerance");
+  }
   // Tighter than the library's own limits: a request must stay cheap and its answer small
   // (a flight lasts at most 60 s: at most 6e6 steps and 6e4 samples).
   if (r.has_dt_s()) {

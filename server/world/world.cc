@@ -9,6 +9,13 @@
 
 namespace sportsim::server {
 
+uint64_t DeriveSeed(uint64_t seed, uint64_t n) {
+  uint64_t z = seed + n * 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
 std::string Quote(std::string_view value) {
   constexpr size_t kMax = 24;
   std::string out = "\"";

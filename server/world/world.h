@@ -31,6 +31,11 @@ absl::Status CheckId(std::string_view field, const std::string& id);
 /// error message (never the whole input: messages travel in gRPC's metadata).
 std::string Quote(std::string_view value);
 
+/// The seed of item n (a shot, a noise sample) from a secret or batch seed: SplitMix64's
+/// finalizer (Steele, Lea & Flood, "Fast splittable pseudorandom number generators", OOPSLA
+/// 2014) over seed + n * golden ratio, so that consecutive items get unrelated seeds.
+uint64_t DeriveSeed(uint64_t seed, uint64_t n);
+
 /// `bytes` random bytes as lower-case hex, from std::random_device.
 std::string RandomHex(int bytes);
 

@@ -85,6 +85,7 @@ absl::StatusOr<ShotResult> SimulateShot(const TableModel& model, const SolverOpt
     }
   }
   out.final_state = sim.state();
+  out.events_handled = sim.events_processed();
   const TableState& s = out.final_state;
   out.at_rest = s.AtRest();
   out.t_rest_s = t_start;

@@ -30,6 +30,7 @@ struct ShotResult {
   double t_rest_s = 0.0;            ///< when the last ball stopped (exact), or the end time
   std::vector<Sample> samples;      ///< includes t = start and the final state
   double cpu_s = 0.0;               ///< thread CPU time of the simulation (s)
+  int64_t events_handled = 0;       ///< events the engine handled, reported or not
 };
 
 /// Simulates from `initial` (velocities and spins already set, e.g. by ApplyStrike) until every
