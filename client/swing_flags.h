@@ -42,7 +42,7 @@ void PrintFlightText(const v1::SimulateFlightResponse& flight);
 std::optional<double> ArmLengthFlag();
 std::optional<double> ClubLengthFlag();
 
-/// The CSV columns of a swing sample (DESIGN.md): the header and one row, each with its newline.
+/// The CSV columns of a swing sample (docs/cli.md): the header and one row, each with its newline.
 std::string SwingCsvHeader();
 std::string SwingCsvRow(const v1::SwingSample& s);
 

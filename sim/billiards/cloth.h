@@ -1,4 +1,4 @@
-// The ball-cloth law shared by every engine (PHYSICS.md section 4; docs/billiards.md).
+// The ball-cloth law shared by every engine (docs/billiards.md; Leckie & Greenspan 2006, Alciatore TP A-4).
 //
 // Contact-point slip u = v + w x (-R z^) = v + R z^ x w (horizontal part).
 // - Sliding (|u| > 0): dv/dt = -mu_s g u^, dw/dt = (5 mu_s g / 2R) (z^ x u^); u^ is constant, so

@@ -1,5 +1,5 @@
 // The cue strike: from cue speed, heading, elevation and tip offset to the cue ball's velocity
-// and spin (PHYSICS.md section 4; Leckie & Greenspan 2006; Alciatore TP ).
+// and spin (Leckie & Greenspan 2006; Alciatore TP ).
 //
 // Model: the tip hits the ball at a point offset from the cue axis by (a R, b R), measured in
 // the plane perpendicular to the cue as the shooter sees the ball (a > 0 right of centre,

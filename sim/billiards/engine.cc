@@ -31,7 +31,7 @@ bool Translating(const Ball& b) { return IsTranslating(b.state); }
 bool Moving(const Ball& b) { return IsMoving(b.state); }
 
 // A ball's (r; v, w) stacked for sim/core/ode (the rates do not depend on r).
-using BallVec = Eigen::Matrix<double, 9, 1>;
+using RateVec = Eigen::Matrix<double, 6, 1>;  // (v, w)
 
 // One integrator step of length h in the ball's current motion state.
 void IntegrateBall(const TableModel& model, uint32_t effects, Integrator integrator, double h,
@@ -39,24 +39,41 @@ void IntegrateBall(const TableModel& model, uint32_t effects, Integrator integra
   if (!Moving(*b) || h <= 0.0) return;
   const MotionState s = b->state;
   const Eigen::Vector3d w0 = b->w;
-  // d(r; v, w)/dt = (v; cloth rates), autonomous.
-  const auto f = [&](double /*t*/, const BallVec& y) {
-    const Rates k = ClothRates(model, effects, s, y.segment<3>(3), y.segment<3>(6));
-    BallVec dy;
-    dy << y.segment<3>(3), k.dv, k.dw;
+  // d(v, w)/dt = cloth rates, autonomous; the position follows the stage velocities (r' = v),
+  // so (v, w) is the ODE's state and r is integrated with the same weights.
+  const auto f = [&](double /*t*/, const RateVec& y) {
+    const Rates k = ClothRates(model, effects, s, y.head<3>(), y.tail<3>());
+    RateVec dy;
+    dy.head<3>() = k.dv;
+    dy.tail<3>() = k.dw;
     return dy;
   };
   switch (integrator) {
-    case Integrator::kEuler:
+    case Integrator::kEuler: {
+      RateVec y;
+      y.head<3>() = b->v;
+      y.tail<3>() = b->w;
+      const RateVec k1 = f(0.0, y);
+      const RateVec y1 = ode::EulerStep(h, y, k1);
+      b->r += h * b->v;
+      b->v = y1.head<3>();
+      b->w = y1.tail<3>();
+      break;
+    }
     case Integrator::kRk4: {
-      BallVec y;
-      y << b->r, b->v, b->w;
-      const BallVec k1 = f(0.0, y);
-      const BallVec y1 = integrator == Integrator::kEuler ? ode::EulerStep(h, y, k1)
-                                                          : ode::Rk4Step(f, 0.0, h, y, k1);
-      b->r = y1.segment<3>(0);
-      b->v = y1.segment<3>(3);
-      b->w = y1.segment<3>(6);
+      RateVec y;
+      y.head<3>() = b->v;
+      y.tail<3>() = b->w;
+      const ode::Rk4Stages<RateVec> k = ode::Rk4StagesOf(f, 0.0, h, y, f(0.0, y));
+      // The stage velocities, as the stages saw them.
+      const Eigen::Vector3d v0 = b->v;
+      const Eigen::Vector3d v2 = v0 + 0.5 * h * k.k1.head<3>();
+      const Eigen::Vector3d v3 = v0 + 0.5 * h * k.k2.head<3>();
+      const Eigen::Vector3d v4 = v0 + h * k.k3.head<3>();
+      const RateVec y1 = k.Combine(h, y);
+      b->r += (h / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
+      b->v = y1.head<3>();
+      b->w = y1.tail<3>();
       break;
     }
     case Integrator::kSemiImplicitEuler: {

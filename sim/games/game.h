@@ -5,7 +5,7 @@
 //
 // Games: 8-ball, 9-ball, 10-ball (pool.{h,cc}), snooker (snooker.{h,cc}), three-cushion
 // (three_cushion.{h,cc}). The rules and their sources (WPA, WPBSA, UMB) are in
-// /work/shared/RULES.md; the JSON contract (names, reasons, keys) in DESIGN.md "Games".
+// docs/games.md; the JSON contract (names, reasons, keys) in docs/cli.md.
 //
 // Seats are 0 and 1. Balls are named by their ids ("cue", "1".."15", "red1", "black", ...) in
 // every type a client sees, and by index into TableState::balls inside a shot's facts.
@@ -67,7 +67,7 @@ absl::StatusOr<Start> StartFromName(std::string_view name);
 enum class Group : uint8_t { kNone, kSolids, kStripes };
 std::string_view GroupName(Group g);  ///< "", "solids", "stripes"
 
-/// How a match ended (DESIGN.md "result").
+/// How a match ended (GameState.result in the API).
 enum class MatchResult : uint8_t { kNone, kWon, kConceded, kThreeFouls, kDraw, kAbandoned };
 std::string_view MatchResultName(MatchResult r);  ///< "", "won", "conceded", "three_fouls", ...
 
@@ -148,7 +148,7 @@ struct Contact {
 /// Two events this close in time count as simultaneous (a split hit) (s).
 inline constexpr double kSimultaneousS = 1e-9;
 
-/// The facts of a shot, gathered from its events (RULES.md "What every referee reads").
+/// The facts of a shot, gathered from its events (docs/games.md).
 struct ShotFacts {
   int struck = -1;
   /// Balls the struck ball touched first, all at first_contact_t_s (several: a split hit),
@@ -181,7 +181,7 @@ ShotFacts ExtractFacts(const ShotRecord& record);
 // ---------------------------------------------------------------------------------------------
 // Verdicts, game events and the game state.
 
-/// The referee's word on one shot (DESIGN.md "last_shot.verdict").
+/// The referee's word on one shot (last_shot.verdict in the API).
 struct Verdict {
   bool foul = false;
   /// snake_case: "" (a plain shot), scratch, no_contact, wrong_ball_first, no_rail,
@@ -224,7 +224,7 @@ struct Decision {
   bool pending() const { return seat >= 0; }
 };
 
-/// Everything of DESIGN.md's "game" JSON, and the bookkeeping the referees need.
+/// Everything of the API's game state (docs/cli.md "game"), and the bookkeeping the referees need.
 struct GameState {
   GameKind game = GameKind::kFree;
   int frame = 1;                      ///< frame (rack) number, from 1

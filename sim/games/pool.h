@@ -1,6 +1,6 @@
 // The pool referees: 8-ball, 9-ball and 10-ball under the WPA Rules of Play (2016): general
 // rules (split hits favour the shooter), 8-ball (section 3), 9-ball (section 2), 10-ball, fouls
-// (section 6). RULES.md lists every point judged here; the referees are reached through
+// (section 6). docs/games.md lists every point judged here; the referees are reached through
 // RefereeFor() (game.h) and share one implementation (pool.cc).
 //
 // Decisions (snake_case choices):

@@ -1,5 +1,5 @@
 // The snooker referee: WPBSA Official Rules of the Game of Snooker, section 3 (rules 1-16) and
-// the definitions of section 2, as RULES.md "Snooker" lists them. The table markings, the
+// the definitions of section 2, as docs/games.md lists them. The table markings, the
 // respotting order and the geometric "snookered" test are in snooker_geometry.h. Reached through
 // SnookerReferee() / RefereeFor(GameKind::kSnooker) (game.h).
 //

@@ -1,4 +1,4 @@
-// The three-cushion referee: UMB World Rules of Carom Billiards, three-cushion, as RULES.md
+// The three-cushion referee: UMB World Rules of Carom Billiards, three-cushion, as docs/games.md
 // "Three-cushion" lists them. Reached through ThreeCushionReferee() /
 // RefereeFor(GameKind::kThreeCushion) (game.h).
 //
@@ -20,7 +20,7 @@
 //
 // The frame: a race to the variant `target` (default 15). With `equal_innings` on, when the
 // seat that broke reaches the target its opponent plays one more inning to level the innings;
-// reaching the target too makes the match a draw (RULES.md: a tie stands as a draw; the
+// reaching the target too makes the match a draw (UMB: a tie stands as a draw; the
 // shoot-out is out of scope). `innings` counts each seat's innings (an inning is counted when
 // it starts). A shot clock's expiry ends the inning (reason `shot_clock`, no foul).
 //

@@ -15,7 +15,7 @@
 // - Coefficient of restitution 0.83: the USGA/R&A limit is 0.822 with a test
 //   tolerance of 0.008, i.e. 0.830, and it applies to every club except the
 //   putter (USGA senior technical director D. Rugge, Golfweek, 2010-07-27).
-// - Driver head mass 0.200 kg: PHYSICS.md section 2; MacKenzie, Ryan & Rice,
+// - Driver head mass 0.200 kg: MacKenzie, Ryan & Rice,
 //   Int. J. Golf Sci. 4, 136 (2015) tested 174-200 g driver heads; the ISEA
 //   2020 paper above measured 204 g.
 // - Fairway wood heads are about 12-15 g heavier than a driver head (D. Irving,

@@ -1,7 +1,7 @@
-// What a human golfer can do, for the "realistic" profile of live sessions (PHYSICS.md section 3;
+// What a human golfer can do, for the "realistic" profile of live sessions (docs/swing-sessions.md;
 // the bounds and how they were chosen are in docs/swing-sessions.md).
 //
-// The binding limit is the clubhead speed: long-drive champions reach about 67 m/s (PHYSICS.md
+// The binding limit is the clubhead speed: long-drive champions reach about 67 m/s (docs/swing-sessions.md
 // section 3, after Bourg & Bywalec ch. 19 and long-drive measurements); tour players average
 // about 51 m/s. We allow 70 m/s, 5 % above the record, so that a record swing passes.
 //

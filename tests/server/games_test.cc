@@ -1,4 +1,4 @@
-// Server-level tests of the ruled games (DESIGN.md "Games"): the real server in-process on an
+// Server-level tests of the ruled games (docs/games.md): the real server in-process on an
 // ephemeral loopback port, called through the generated stubs over a real gRPC channel, with
 // table time running kClockRate times faster than real time.
 //

@@ -100,11 +100,11 @@ TEST_F(ServerTest, GetInfoListsTheBilliardsCapabilities) {
                                      "unbounded"));
   EXPECT_THAT(c.racks(), ::testing::UnorderedElementsAre("empty", "8ball", "9ball", "snooker",
                                                          "three-cushion", "chapter19"));
-  // DESIGN.md's effects for --disable.
+  // The documented effects (docs/cli.md) for --disable.
   EXPECT_THAT(c.effects(), ::testing::UnorderedElementsAre(
                                "drag", "spin_decay", "rolling_resistance", "ball_friction",
                                "cushions", "pockets", "orientation", "squirt"));
-  // DESIGN.md: at least these parameters, each with a unit (where it has one), a default
+  // docs/cli.md: at least these parameters, each with a unit (where it has one), a default
   // inside its range, and a description.
   std::map<std::string, v1::ParameterInfo> params;
   for (const v1::ParameterInfo& p : c.parameters()) {

@@ -1,4 +1,4 @@
-// The closed-form validation cases of PHYSICS.md section 4 (billiards), run on the event engine
+// The closed-form validation cases of docs/billiards.md, run on the event engine
 // and on the stepped engine for every integrator: ball-cloth laws, collisions, the cue strike, energy and momentum,
 // the mirror cushion, and the chapter's demonstration scene.
 //
@@ -489,7 +489,7 @@ TEST_P(ClosedFormTest, StraightStunHitSharesTheSpeedByRestitution) {
 // ball). Without ball friction the object ball leaves along the line of centres n with
 // (1 + e)/2 (v.n), and the cue ball keeps v - (1 + e)/2 (v.n) n: a tangential part v sin(alpha)
 // and a part (1 - e)/2 v cos(alpha) along n. So the cue ball leaves the tangent line, turned
-// towards the object ball's path, by atan(((1 - e)/2) cos(alpha) / sin(alpha)) (PHYSICS.md case
+// towards the object ball's path, by atan(((1 - e)/2) cos(alpha) / sin(alpha)) (the validation case
 // 5), and the two balls separate at 90 deg minus that. This holds for the velocities just after
 // contact whatever the cue ball's spin, since without friction spin plays no part in the
 // impulse.
@@ -561,7 +561,7 @@ TEST_P(ClosedFormTest, RollingCueBallThirtyDegreeRule) {
     const double v_hit = hit->va.norm() / s;
     EXPECT_NEAR(rolls_again->va.norm(), v_hit * std::hypot(s, 2.0 / 7.0 * c), kVelTolMps);
     if (alpha_deg == 30.0) {
-      EXPECT_NEAR(RadToDeg(expected), 33.67, 0.005);  // PHYSICS.md's 33.7
+      EXPECT_NEAR(RadToDeg(expected), 33.67, 0.005);  // the published 33.7
     }
   }
 }
@@ -577,7 +577,7 @@ TEST_P(ClosedFormTest, RollingCueBallThirtyDegreeRule) {
 // Interpretation of mu = a + b exp(-c v_rel): v_rel is the relative speed of the two ball
 // surfaces at the contact point, as in Alciatore's TP A-14 (and pooltool's
 // AlciatoreBallBallFriction, which takes the tangential relative surface velocity); for a stun
-// cut that is v sin(alpha). That reading is the one that reproduces PHYSICS.md's "about 3.3 deg at
+// cut that is v sin(alpha). That reading is the one that reproduces the published "about 3.3 deg at
 // a 30 deg cut and 1.5 m/s" (3.30 deg); mu at |v_a - v_b| = 1.5 m/s would give 1.78 deg.
 //
 // The cue ball starts touching the object ball, so it arrives with exactly zero spin (a
@@ -832,7 +832,7 @@ TEST_P(ClosedFormTest, MirrorCushionKeepsAngleAndSpeed) {
 // --- The chapter's demonstration scene. -----------------------------------------------------
 //
 // Cue ball 50 diameters back at 7 m/s along +x, no spin; the 8-ball one diameter ahead of the
-// pair at (0, -/+0.75 D). PHYSICS.md: the cue ball slides, starts to roll, hits the 8, which
+// pair at (0, -/+0.75 D). The case: the cue ball slides, starts to roll, hits the 8, which
 // strikes both others; they run off diagonally and the 8 stops quickly. (With mu_s = 0.2 the
 // cue ball would slide 12 v^2 / (49 mu_s g) = 6.1 m before rolling, but reaches the 8 after
 // 2.74 m and 0.42 s, still sliding; we do not assert the "starts to roll" part.)

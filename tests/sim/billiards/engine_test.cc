@@ -63,7 +63,7 @@ bool SameBits(const TableState& a, const TableState& b) {
   return true;
 }
 
-// PHYSICS.md's tunnelling pitfall: 13 m/s at a 1/120 s step moves the ball 108 mm per step,
+// The tunnelling pitfall: 13 m/s at a 1/120 s step moves the ball 108 mm per step,
 // more than the 76 mm chord through a ball hit at an offset of 1.5 R. Without CCD some phases
 // of the step grid jump straight through; with CCD every phase collides.
 // The engine can leave a ball at rest on a pocket's lip, between the jaws and beyond the rail

@@ -1,6 +1,6 @@
 // Randomized cross-check: thousands of random real shots per pool game (seeded), each judged by
 // the referee and by a deliberately simple second statement of the basic foul rules written
-// here from RULES.md, straight over the raw events. The two must agree on foul or not.
+// here from the WPA rules, straight over the raw events. The two must agree on foul or not.
 #include <algorithm>
 #include <iostream>
 #include <cmath>

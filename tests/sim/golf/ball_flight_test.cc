@@ -17,7 +17,7 @@ namespace {
 
 constexpr double kG = 9.80665;  // standard gravity (m/s^2), the default
 
-// TrackMan PGA Tour driver averages (PHYSICS.md section 2; TrackMan's table
+// TrackMan PGA Tour driver averages (TrackMan's table
 // published before 2024): ball speed 167 mph, launch 10.9 deg, spin
 // 2686 rpm -> carry 275 yd, apex 32 yd, landing angle 38 deg.
 LaunchConditions PgaTourDriver() {
@@ -400,7 +400,7 @@ TEST(BallFlightSamples, StartAtLaunchEndAtLanding) {
 
 TEST(BallFlightPgaTour, DriverCarryWithinFivePercent) {
   // The published fit, untuned, in the ISA sea-level atmosphere, no wind.
-  constexpr double kCheckRelTol = 0.05;  // PHYSICS.md asks for "a few %"
+  constexpr double kCheckRelTol = 0.05;  // "a few %" of the published averages
   const FlightResult r = Fly(PgaTourDriver(), {});
   EXPECT_NEAR(r.carry_m / kYardToM, 275.0, kCheckRelTol * 275.0);
 }
@@ -422,7 +422,7 @@ TEST(BallFlightPgaTour, EveryClubAgainstTrackManAverages) {
   // FlightScope-measured shots), so this is an independent check. Measured:
   // carry -4.7..+2.7 %, apex -8.4..+4.7 %, landing angle 1.1..7.3 deg
   // shallow (the fit has no Re term, so the late drag rise near the apex
-  // is missing). Bounds: carry 5 % (PHYSICS.md's "a few %"), apex 10 %,
+  // is missing). Bounds: carry 5 % ("a few %"), apex 10 %,
   // landing angle 8 deg low to 2 deg high.
   struct Club {
     const char* name;
