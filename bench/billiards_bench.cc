@@ -6,10 +6,13 @@
 // not benchmarked: a ball with side spin then never comes to rest.)
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <memory>
 #include <random>
 
 #include "absl/strings/str_format.h"
 #include "bench/billiards_scenes.h"
+#include "bench/billiards_storms.h"
 #include "sim/billiards/shot.h"
 
 namespace sportsim::billiards {
@@ -78,7 +81,7 @@ BENCHMARK(BM_EightBallBreak)
     ->Args({120, 0})
     ->Args({960, 0})
     ->Args({960, kEffectDisableOrientation})
-    ->Args({960, 0})
+    ->Args({960, kEffectEnableDrag})
     ->Unit(benchmark::kMicrosecond);
 
 // A batch of 256 seeded random shots on a 9-ft table with a 9-ball rack (random speed 0.5-8
@@ -116,6 +119,45 @@ BENCHMARK(BM_RandomShots)
     ->Arg(0)
     ->Arg(kEffectDisableOrientation)
     ->Unit(benchmark::kMillisecond);
+
+// The storm batch (bench/billiards_storms.h, bench/results/storms-2026-12.md): 1000 seeded
+// random shots from the tight 8-ball rack with FastFiz's shot distribution, each to rest with
+// the event engine (orientation on). range(0): 0 = sustained resting contacts (the default), 1 =
+// the hops of before (RestingContacts::kHops). Time per iteration / 1000 = CPU per shot;
+// counters: events handled per shot (mean, p99, max) and reported per shot (mean, max).
+void BM_RackShots(benchmark::State& state) {
+  const TableModel m = *TableModel::Create(*MakeTablePreset("pool-9ft"));
+  const std::vector<TableState> batch = StormBatch(m, 1000, 2026);
+  const SolverOptions o = StormOptions(state.range(0) == 1);
+  state.SetLabel(state.range(0) == 1 ? "hops (before)" : "sustained contacts");
+  std::vector<double> handled(batch.size());
+  double reported = 0.0, reported_max = 0.0;
+  for (auto _ : state) {
+    reported = reported_max = 0.0;
+    for (size_t i = 0; i < batch.size(); ++i) {
+      std::vector<Event> ev;
+      std::unique_ptr<TableSimulation> sim = *TableSimulation::Create(m, o, batch[i], &ev);
+      for (int k = 1; k <= 600 && !sim->AtRest(); ++k) {
+        if (!sim->AdvanceTo(batch[i].t_s + k, &ev).ok()) std::abort();
+      }
+      benchmark::DoNotOptimize(sim->state());
+      handled[i] = static_cast<double>(sim->events_processed());
+      reported += static_cast<double>(ev.size());
+      reported_max = std::max(reported_max, static_cast<double>(ev.size()));
+    }
+  }
+  std::vector<double> sorted = handled;
+  std::sort(sorted.begin(), sorted.end());
+  double sum = 0.0;
+  for (double h : sorted) sum += h;
+  state.counters["handled_mean"] = sum / static_cast<double>(sorted.size());
+  state.counters["handled_p99"] = sorted[sorted.size() * 99 / 100];
+  state.counters["handled_max"] = sorted.back();
+  state.counters["reported_mean"] = reported / static_cast<double>(batch.size());
+  state.counters["reported_max"] = reported_max;
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(batch.size()));
+}
+BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sportsim::billiards

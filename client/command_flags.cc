@@ -191,6 +191,21 @@ std::vector<CommandSpec> MakeSpecs() {
               {"max_time", "stop after this much simulated time, (0, 3600] s (default 600)"},
               {"svg", "write a top view of the table with the paths and events"}}}),
        /*series=*/true},
+      {"shot", "batch", "",
+       "fast-forward a batch of candidate strikes, read from stdin (one CueStrike as JSON a "
+       "line: ball_speed_mps or speed_mps, phi_deg, theta_deg, a, b, ball); prints one JSON "
+       "outcome a line, in input order",
+       Join({SetupFlags(), SolverFlags(),
+             {{"samples", "noise samples of each strike, [1, 1000] (default 1); strikes x "
+                          "samples at most 100000"},
+              {"noise", "Gaussian noise on every sample, [0, 100]; 1 = FastFiz's sigmas "
+                        "(default 0: every sample is the strike itself)"},
+              {"seed", "seed of --noise: the same seed, the same outcomes (default 0)"},
+              {"outcome", "summary (default: first contact, pocketed, t_rest_s), final (and "
+                          "every ball's final state) or events (and every event)"},
+              {"max_time", "stop each shot after this much simulated time, (0, 3600] s "
+                           "(default 600)"}}}),
+       /*series=*/false, /*stream=*/true},
       {"table", "create", "",
        "an authoritative table; prints the seat tokens (and a ruled game's admin token)",
        Join({SetupFlags(), SolverFlags(),

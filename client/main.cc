@@ -1,4 +1,4 @@
-// sportsim: the command-line client. `sportsim --help` for commands; DESIGN.md's command-line
+// sportsim: the command-line client. `sportsim --help` for commands; docs/cli.md's command-line
 // contract is the reference for flags and JSON keys.
 #include <algorithm>
 #include <charconv>
@@ -70,6 +70,10 @@ Commands:
       (--integrator, --dt, --no-ccd: with --engine stepped only)
       [--cushion-model han|mirror] [--noise X --seed N] [--jitter M --rack-seed N]
       [--sample-rate HZ] [--max-time S] [--svg FILE]
+  shot batch [setup and solver flags of shot simulate] [--samples N] [--noise X] [--seed N]
+      [--outcome summary|final|events] [--max-time S] < strikes.jsonl   a batch of candidate
+      strikes, one CueStrike as JSON a line ({"ball_speed_mps": 2, "phi_deg": 10, "a": 0.1});
+      prints one JSON outcome a line, in input order
   table create [setup and solver flags of shot simulate] [--seats N] [--seat-names A,B]
       [--tick-hz HZ]                       an authoritative table; prints the seat tokens
       [--game free|8ball|9ball|10ball|snooker|three-cushion --race-to N --shot-clock S
@@ -88,7 +92,7 @@ Commands:
       exits at the end of the shot in progress, or (at rest) of the next shot
 Flags may be written --name value or --name=value; dashes and underscores are the same. A
 flag the command does not take is a usage error. --format jsonl: streams (the watch commands,
-swing drive) only; csv: commands with a series (simulate, watch, drive) only.
+swing drive, shot batch) only; csv: commands with a series (simulate, watch, drive) only.
 Errors: the gRPC status code name and message on stderr, exit status = the code number
 (64 for usage errors; 65: swing drive, some commands refused).
 sportsim COMMAND SUBCOMMAND --help lists a command's flags; --helpfull lists every flag.)";
@@ -620,7 +624,8 @@ int main(int argc, char** argv) {
     }
     if (ctx.format == Format::kJsonl && !spec->stream) {
       return UsageError("--format jsonl: " + name + " prints one document, not a stream "
-                        "(jsonl is for table watch, swing watch and swing drive; use json)");
+                        "(jsonl is for table watch, swing watch, swing drive and shot batch; use "
+                        "json)");
     }
   }
   if (command == "info") return RunInfo(ctx, rest);

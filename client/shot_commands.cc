@@ -1,4 +1,5 @@
-// `sportsim shot ...`: fast-forward a cue shot (Billiards/SimulateShot).
+// `sportsim shot ...`: fast-forward a cue shot (Billiards/SimulateShot), or a batch of
+// candidate strikes (Billiards/SimulateShots).
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -8,12 +9,14 @@
 #include <string>
 #include <vector>
 
+#include <google/protobuf/util/json_util.h>
 #include <grpcpp/grpcpp.h>
 
 #include "absl/flags/declare.h"
 #include "absl/flags/flag.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_format.h"
+#include "absl/strings/ascii.h"
 #include "absl/strings/str_split.h"
 #include "client/billiards_flags.h"
 #include "client/cli.h"
@@ -45,6 +48,8 @@ ABSL_FLAG(std::vector<std::string>, enable, {}, "Effects off by default to switc
 ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mirror");
 ABSL_FLAG(std::optional<double>, sample_rate, std::nullopt, "Trajectory samples per second");
 ABSL_FLAG(std::optional<double>, max_time, std::nullopt, "Stop after this much simulated time (s)");
+ABSL_FLAG(int, samples, 1, "shot batch: noise samples of each strike, [1, 1000]");
+ABSL_FLAG(std::string, outcome, "summary", "shot batch: what each outcome carries: summary|final|events");
 ABSL_FLAG(std::string, svg, "", "Write a picture to this SVG file (shots, tables: top view; swings: stroboscopic side view)");
 
 namespace sportsim::cli {
@@ -242,13 +247,113 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   return PrintResponse(ctx, response, PrintCsv, PrintText);
 }
 
+
+// `shot batch`: candidate strikes from stdin, one CueStrike as JSON a line (protobuf's JSON
+// mapping of CueStrike: ball, speed_mps | ball_speed_mps, phi_deg, theta_deg, a, b; the
+// lowerCamel spellings too); blank lines and lines starting with '#' skipped. A line that does
+// not parse is a usage error naming it.
+std::optional<std::string> ReadStrikes(std::istream& in, v1::SimulateShotsRequest* request) {
+  std::string line;
+  int line_number = 0;
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = false;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const absl::string_view text = absl::StripAsciiWhitespace(line);
+    if (text.empty() || text[0] == '#') continue;
+    if (request->strikes_size() >= 10000) {
+      return absl::StrFormat("stdin: at most 10000 strikes in one batch (line %d is one more)",
+                             line_number);
+    }
+    v1::CueStrike strike;
+    const auto parsed =
+        google::protobuf::util::JsonStringToMessage(std::string(text), &strike, options);
+    if (!parsed.ok() || text[0] != '{') {
+      return absl::StrFormat(
+          "stdin line %d must be a CueStrike as JSON, e.g. {\"ball_speed_mps\": 2, "
+          "\"phi_deg\": 10} (keys ball, speed_mps or ball_speed_mps, phi_deg, theta_deg, a, b): "
+          "%s",
+          line_number, parsed.ok() ? "not an object" : std::string(parsed.message()));
+    }
+    if (strike.speed_case() == v1::CueStrike::SPEED_NOT_SET) {
+      return absl::StrFormat("stdin line %d: give speed_mps (cue speed) or ball_speed_mps",
+                             line_number);
+    }
+    if (strike.noise() != 0 || strike.seed() != 0) {
+      return absl::StrFormat(
+          "stdin line %d: noise and seed are the batch's (--noise, --seed), not a strike's",
+          line_number);
+    }
+    *request->add_strikes() = std::move(strike);
+  }
+  if (request->strikes_size() == 0) {
+    return "shot batch reads its strikes from stdin, one JSON object a line (none given)";
+  }
+  return std::nullopt;
+}
+
+int RunBatch(const Context& ctx, const std::vector<std::string>& args) {
+  if (!args.empty()) return UsageError("shot batch takes flags only (strikes on stdin), got '" + args[0] + "'");
+  v1::SimulateShotsRequest request;
+  if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
+  if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
+  const int samples = absl::GetFlag(FLAGS_samples);
+  if (samples < 1 || samples > 1000) {
+    return UsageError(absl::StrFormat("--samples: must be in [1, 1000], got %d", samples));
+  }
+  request.set_samples_per_strike(static_cast<uint32_t>(samples));
+  const double noise = absl::GetFlag(FLAGS_noise);
+  if (!(noise >= 0 && noise <= 100)) return UsageError("--noise: must be in [0, 100], got " + Num(noise));
+  request.set_noise(noise);
+  request.set_seed(absl::GetFlag(FLAGS_seed));
+  const std::string outcome = absl::GetFlag(FLAGS_outcome);
+  if (outcome == "summary") request.set_outcome(v1::SHOT_OUTCOME_SUMMARY);
+  else if (outcome == "final") request.set_outcome(v1::SHOT_OUTCOME_FINAL);
+  else if (outcome == "events") request.set_outcome(v1::SHOT_OUTCOME_EVENTS);
+  else return UsageError("--outcome must be summary, final or events, got '" + outcome + "'");
+  if (auto t = absl::GetFlag(FLAGS_max_time)) {
+    if (!(*t > 0 && *t <= 3600)) return UsageError("--max-time: must be in (0, 3600] s, got " + Num(*t));
+    request.set_max_time_s(*t);
+  }
+  if (auto bad = ReadStrikes(std::cin, &request)) return UsageError(*bad);
+  if (static_cast<int64_t>(request.strikes_size()) * samples > 100000) {
+    return UsageError(absl::StrFormat(
+        "%d strikes x --samples %d is above the 100000 outcomes of one batch",
+        request.strikes_size(), samples));
+  }
+
+  auto stub = v1::Billiards::NewStub(ctx.channel);
+  std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
+  std::unique_ptr<grpc::ClientReader<v1::SimulateShotsResponse>> reader =
+      stub->SimulateShots(call.get(), request);
+  // jsonl (and the default): one outcome a line as they come; json: one document at the end.
+  const bool document = ctx.format == Format::kJson;
+  v1::SimulateShotsResponse all;
+  v1::SimulateShotsResponse response;
+  while (reader->Read(&response)) {
+    for (v1::ShotOutcome& o : *response.mutable_outcomes()) {
+      if (document) {
+        *all.add_outcomes() = std::move(o);
+      } else {
+        std::cout << ToJson(o, true) << "\n";
+      }
+    }
+    if (!document) std::cout.flush();
+  }
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) return ReportRpcError(status);
+  if (document) std::cout << ToJson(all, false) << "\n";
+  return 0;
+}
+
 }  // namespace
 
 int RunShot(const Context& ctx, const std::vector<std::string>& args) {
-  if (args.empty()) return UsageError("shot needs a subcommand: simulate");
+  if (args.empty()) return UsageError("shot needs a subcommand: simulate or batch");
   const std::vector<std::string> rest(args.begin() + 1, args.end());
   if (args[0] == "simulate") return RunSimulate(ctx, rest);
-  return UsageError("unknown shot subcommand '" + args[0] + "' (simulate)");
+  if (args[0] == "batch") return RunBatch(ctx, rest);
+  return UsageError("unknown shot subcommand '" + args[0] + "' (simulate, batch)");
 }
 
 }  // namespace sportsim::cli

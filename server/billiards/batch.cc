@@ -102,7 +102,11 @@ void ComputeOutcome(const BatchJob& job, int64_t n, const std::function<bool()>&
   b::TableState state = job.table.state;
   b::CueStrike strike = s.strike;
   strike.noise = job.noise;
-  strike.seed = job.noise > 0 ? DeriveSeed(job.seed, static_cast<uint64_t>(n)) : 0;
+  // Sample k of strike i: a seed of (seed, i, k) alone, so that asking for more samples keeps
+  // the ones already seen.
+  strike.seed = job.noise > 0 ? DeriveSeed(DeriveSeed(job.seed, static_cast<uint64_t>(index)),
+                                           static_cast<uint64_t>(sample))
+                              : 0;
   absl::StatusOr<b::StrikeOutcome> applied =
       b::ApplyStrike(model, job.solver.effects, strike, s.cue, &state);
   if (!applied.ok()) {

@@ -51,6 +51,7 @@ absl::Status RunPreview(const PreviewJob& job, const std::function<bool()>& stop
   int struck_events = 0, target_events = 0;
   bool struck_done = false, target_done = false;
   double t = 0.0;
+  b::TableState before = start;  // the balls at the start of the current 5 ms step
   while (!(struck_done && (target < 0 ? struck_done : target_done)) && !sim.AtRest() &&
          t < kMaxPreviewS) {
     if (stop && stop()) return absl::CancelledError("the preview was stopped");
@@ -65,18 +66,19 @@ absl::Status RunPreview(const PreviewJob& job, const std::function<bool()>& stop
         target = e.a == job.cue ? e.b : e.a;
         met = out->add_paths();
         met->set_ball(now.balls[target].id);
+        // Its path starts where it was met (it stood still until then, or moved less than a
+        // step's worth).
+        AddPoint(before, target, e.t_s, met);
       }
       const bool on_target = target >= 0 && (e.a == target || e.b == target);
-      bool report = false;
-      if (on_struck && !struck_done && struck_events < job.max_events) {
-        ++struck_events;
-        report = true;
-      }
-      if (on_target && !target_done && target_events < job.max_events) {
-        ++target_events;
-        report = true;
-      }
-      if (report) EventToProto(model, now, e, out->add_events());
+      // An event of a followed ball counts for each followed ball in it; it is reported only
+      // while every one of them has events left, so no ball shows more than max_events.
+      const bool struck_room = !on_struck || (!struck_done && struck_events < job.max_events);
+      const bool target_room = !on_target || (!target_done && target_events < job.max_events);
+      if (!(on_struck || on_target) || !struck_room || !target_room) continue;
+      if (on_struck) ++struck_events;
+      if (on_target) ++target_events;
+      EventToProto(model, now, e, out->add_events());
     }
     if (!struck_done) AddPoint(now, job.cue, t, struck);
     if (met != nullptr && !target_done) AddPoint(now, target, t, met);
@@ -84,6 +86,7 @@ absl::Status RunPreview(const PreviewJob& job, const std::function<bool()>& stop
     if (target >= 0) {
       target_done = target_events >= job.max_events || Settled(now.balls[target]);
     }
+    before = now;
   }
   return absl::OkStatus();
 }

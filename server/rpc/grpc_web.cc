@@ -130,6 +130,11 @@ absl::StatusOr<std::unique_ptr<GrpcWebGateway>> GrpcWebGateway::Start(
                            "num_threads", threads.c_str(),
                            "enable_keep_alive", "yes",
                            "request_timeout_ms", "30000",
+                           // CORS is ours (--http_cors_origins): civetweb's own answers to
+                           // preflights, "*" by default, are switched off.
+                           "access_control_allow_origin", "",
+                           "access_control_allow_methods", "",
+                           "access_control_allow_headers", "",
                            nullptr};
   mg_callbacks callbacks{};
   g->http_ = mg_start(&callbacks, g.get(), options);

@@ -356,28 +356,42 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
     // Outcomes with every event are large: one a message.
     chunk_ = job_->outcome == v1::SHOT_OUTCOME_EVENTS ? 1 : 32;
     chunks_ = (job_->size() + chunk_ - 1) / chunk_;
-    absl::MutexLock lock(&mu_);
-    Pump();
+    std::optional<grpc::Status> finish;
+    {
+      absl::MutexLock lock(&mu_);
+      finish = Pump();
+    }
+    if (finish.has_value()) Finish(*finish);
   }
 
   void OnWriteDone(bool ok) override {
-    absl::MutexLock lock(&mu_);
-    writing_ = false;
-    if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
-    Pump();
+    std::optional<grpc::Status> finish;
+    {
+      absl::MutexLock lock(&mu_);
+      writing_ = false;
+      if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
+      finish = Pump();
+    }
+    if (finish.has_value()) Finish(*finish);
   }
   void OnCancel() override {
-    absl::MutexLock lock(&mu_);
-    if (error_.ok()) error_ = absl::CancelledError("the call was cancelled");
-    Pump();
+    std::optional<grpc::Status> finish;
+    {
+      absl::MutexLock lock(&mu_);
+      if (error_.ok()) error_ = absl::CancelledError("the call was cancelled");
+      finish = Pump();
+    }
+    if (finish.has_value()) Finish(*finish);
   }
   void OnDone() override { delete this; }
 
  private:
   // Submits chunks while few are outstanding, writes the next chunk in order when it is
-  // ready, and finishes when all is written (or on an error once nothing runs).
-  void Pump() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-    if (finished_) return;
+  // ready, and says when to finish: when all is written (or on an error once nothing runs).
+  // The caller finishes after releasing mu_ and touches nothing after that (OnDone may delete
+  // the reactor at once, on another thread).
+  std::optional<grpc::Status> Pump() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (finished_) return std::nullopt;
     while (error_.ok() && next_submit_ < chunks_ &&
            outstanding_ < std::max(2, 2 * pool_->workers())) {
       const int64_t c = next_submit_++;
@@ -385,10 +399,14 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
       absl::Status queued = pool_->Submit(
           [this, c](const WorkControl& control) { Run(c, control); },
           [this](const absl::Status& dropped) {
-            absl::MutexLock lock(&mu_);
-            --outstanding_;
-            if (error_.ok()) error_ = dropped;
-            Pump();
+            std::optional<grpc::Status> finish;
+            {
+              absl::MutexLock lock(&mu_);
+              --outstanding_;
+              if (error_.ok()) error_ = dropped;
+              finish = Pump();
+            }
+            if (finish.has_value()) Finish(*finish);
           },
           [this] { return ctx_->IsCancelled(); }, DeadlineOf(ctx_));
       if (!queued.ok()) {
@@ -404,14 +422,15 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
         ++next_write_;
         writing_ = true;
         StartWrite(&out_);
-        return;
+        return std::nullopt;
       }
     }
     const bool all_written = next_write_ == chunks_;
     if (!writing_ && outstanding_ == 0 && (all_written || !error_.ok())) {
       finished_ = true;
-      Finish(ToGrpcStatus(error_));
+      return ToGrpcStatus(error_);
     }
+    return std::nullopt;
   }
 
   // One chunk on a worker: outcomes [c * chunk_, ...), each polling the call and the batch's
@@ -422,38 +441,64 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
     const int64_t last = std::min(job_->size(), first + chunk_);
     absl::Status stopped;
     const double cpu0 = control.CpuSeconds();
+    double counted_so_far = 0.0;
     const auto stop = [&] {
-      if (!control.ShouldStop() &&
-          cpu_used_.load(std::memory_order_relaxed) + (control.CpuSeconds() - cpu0) <=
-              cpu_budget_s_) {
-        return false;
-      }
-      return true;
+      return control.ShouldStop() ||
+             cpu_used_.load(std::memory_order_relaxed) +
+                     (control.CpuSeconds() - cpu0 - counted_so_far) >
+                 cpu_budget_s_;
     };
+    // Why the chunk stops: the call (cancelled, deadline, shutdown) or the batch's budget.
+    const auto why = [&](int64_t n) {
+      absl::Status st = control.Check();
+      if (st.ok()) {
+        st = absl::ResourceExhaustedError(absl::StrFormat(
+            "the batch used its CPU budget of %g s (--max_request_cpu) after %d outcomes: send "
+            "fewer strikes or samples per call",
+            cpu_budget_s_, n));
+        pool_->CountBudgetExhausted();
+      }
+      return st;
+    };
+    double counted = 0.0;  // of this chunk's CPU, what cpu_used_ already holds
     for (int64_t n = first; n < last && stopped.ok(); ++n) {
       if (stop()) {
-        stopped = control.Check();
-        if (stopped.ok()) {
-          stopped = absl::ResourceExhaustedError(absl::StrFormat(
-              "the batch used its CPU budget of %g s (--max_request_cpu) after %d outcomes: "
-              "send fewer strikes or samples per call",
-              cpu_budget_s_, n));
-          pool_->CountBudgetExhausted();
-        }
+        stopped = why(n);
         break;
       }
       ComputeOutcome(*job_, n, stop, response.add_outcomes());
+      // An outcome the stop cut short is not an outcome: the batch ends with the reason.
+      if (stop()) {
+        response.mutable_outcomes()->RemoveLast();
+        stopped = why(n);
+        break;
+      }
+      // The budget is the batch's: every chunk sees the others' CPU as it goes.
+      const double now = control.CpuSeconds() - cpu0;
+      AddCpu(now - counted);
+      counted = now;
+      counted_so_far = counted;
     }
-    const double used = control.CpuSeconds() - cpu0;
-    absl::MutexLock lock(&mu_);
-    cpu_used_.store(cpu_used_.load(std::memory_order_relaxed) + used, std::memory_order_relaxed);
-    --outstanding_;
-    if (!stopped.ok()) {
-      if (error_.ok()) error_ = stopped;
-    } else {
-      ready_.emplace(c, std::move(response));
+    const double used = control.CpuSeconds() - cpu0 - counted;
+    std::optional<grpc::Status> finish;
+    {
+      absl::MutexLock lock(&mu_);
+      AddCpu(used);
+      --outstanding_;
+      if (!stopped.ok()) {
+        if (error_.ok()) error_ = stopped;
+      } else {
+        ready_.emplace(c, std::move(response));
+      }
+      finish = Pump();
     }
-    Pump();
+    if (finish.has_value()) Finish(*finish);
+  }
+
+  void AddCpu(double s) {
+    double old = cpu_used_.load(std::memory_order_relaxed);
+    while (!cpu_used_.compare_exchange_weak(old, old + s, std::memory_order_relaxed)) {
+    }
   }
 
   WorkPool* const pool_;

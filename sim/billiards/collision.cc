@@ -47,6 +47,119 @@ bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
   return true;
 }
 
+namespace {
+
+// Ball on the rolling manifold (or at rest, or spinning in place): it answers a finite contact
+// force through the rolling constraint.
+bool OnRollingManifold(const Ball& b) {
+  return b.state == MotionState::kRolling || b.state == MotionState::kStationary ||
+         b.state == MotionState::kSpinning;
+}
+
+// Horizontal velocity change of a ball from impulse p at r_c (from its centre).
+Eigen::Vector3d Response(const TableModel& model, bool rolling, const Eigen::Vector3d& p,
+                         const Eigen::Vector3d& rc) {
+  Eigen::Vector3d ph(p.x(), p.y(), 0.0);
+  if (!rolling) return ph / model.mass();
+  const Eigen::Vector3d torque = rc.cross(p);
+  const Eigen::Vector3d turn = Eigen::Vector3d::UnitZ().cross(torque) / model.radius();
+  return (5.0 / (7.0 * model.mass())) * (ph - Eigen::Vector3d(turn.x(), turn.y(), 0.0));
+}
+
+// Applies impulse p at r_c to ball b as a sustained contact: through the rolling constraint
+// when the ball is on the rolling manifold, else as to a free ball. Then the cloth's answers
+// that would end within the resting time scale (about 0.1 ms) are applied at once: a slide
+// with slip below kRestingContactSpeed ends (v - 2/7 u, the slide-to-roll), the spin about z
+// the contact's friction gives a ball without side spin is taken by the cloth's spin friction
+// (side spin is never reversed by it: it stops first).
+void Apply(const TableModel& model, uint32_t effects, bool rolling, const Eigen::Vector3d& p,
+           const Eigen::Vector3d& rc, Ball* b) {
+  const double radius = model.radius();
+  const Eigen::Vector3d torque = rc.cross(p);
+  const double wz0 = b->w.z();
+  b->v += Response(model, rolling, p, rc);
+  b->v.z() = 0.0;
+  if (!rolling) {
+    b->w += torque / model.inertia();
+    const Eigen::Vector3d u = Slip(b->v, b->w, radius);
+    rolling = u.norm() < kRestingContactSpeed;
+    if (rolling) b->v -= (2.0 / 7.0) * u;
+  }
+  if (rolling) {
+    b->w.x() = -b->v.y() / radius;
+    b->w.y() = b->v.x() / radius;
+  }
+  const double wz = wz0 + torque.z() / model.inertia();
+  const bool absorb = (effects & kEffectDisableSpinDecay) == 0 &&
+                      (wz0 == 0.0 || (wz > 0.0) != (wz0 > 0.0));
+  b->w.z() = absorb ? 0.0 : wz;
+  b->state = Classify(model, *b);
+}
+
+}  // namespace
+
+double RestingStopSpeed(const TableModel& model) {
+  return std::sqrt(2.0 * kRestingStopDistance * model.params().mu_roll *
+                   model.params().gravity_mps2);
+}
+
+void StopCreep(const TableModel& model, uint32_t effects, Ball* b) {
+  if ((effects & kEffectDisableRollingResistance) != 0 || b->state != MotionState::kRolling ||
+      !(b->v.head<2>().norm() < RestingStopSpeed(model))) {
+    return;
+  }
+  b->v.setZero();
+  b->w.x() = b->w.y() = 0.0;
+  b->state = Classify(model, *b);
+}
+
+bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
+  Eigen::Vector3d n = b->r - a->r;
+  n.z() = 0.0;
+  const double dist = n.norm();
+  if (dist == 0.0) return false;
+  n /= dist;
+  const Eigen::Vector3d v_rel = a->v - b->v;
+  const double approach = v_rel.dot(n);
+  if (approach <= kMinApproachSpeed) return false;
+  const PhysicsParams& p = model.params();
+  const double m = model.mass();
+  const double radius = model.radius();
+  const bool ra = OnRollingManifold(*a), rb = OnRollingManifold(*b);
+  const Eigen::Vector3d rca = radius * n, rcb = -radius * n;
+  // Normal relative velocity after, per unit normal impulse and per unit friction impulse.
+  const double kn = (Response(model, ra, -n, rca) - Response(model, rb, n, rcb)).dot(n);
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+  double cap = 0.0, mu = 0.0, kt = 0.0;
+  if ((effects & kEffectDisableBallFriction) == 0) {
+    const Eigen::Vector3d u = v_rel + radius * (a->w + b->w).cross(n);
+    const Eigen::Vector3d ut = u - u.dot(n) * n;
+    const double slip = ut.norm();
+    if (slip > 0.0) {
+      t = ut / slip;  // friction on a is -pt t
+      mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * slip);
+      cap = m * slip / 7.0;
+      kt = (Response(model, ra, -t, rca) - Response(model, rb, t, rcb)).dot(n);
+    }
+  }
+  // approach + jn kn + pt kt = 0 with pt = min(mu jn, cap): linear on each branch.
+  double jn = -approach / (kn + mu * kt);
+  double pt = mu * jn;
+  if (!(jn > 0.0) || pt > cap) {
+    pt = cap;
+    jn = -(approach + cap * kt) / kn;
+    if (!(jn > 0.0)) {
+      jn = -approach / kn;  // friction alone would part them: no friction
+      pt = 0.0;
+    }
+    pt = std::min(pt, mu * jn);
+  }
+  const Eigen::Vector3d impulse_a = -jn * n - pt * t;
+  Apply(model, effects, ra, impulse_a, rca, a);
+  Apply(model, effects, rb, -impulse_a, rcb, b);
+  return true;
+}
+
 bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball* ball) {
   const Eigen::Vector3d nh(normal.x(), normal.y(), 0.0);
   const double vn = ball->v.dot(nh);

@@ -40,6 +40,30 @@ inline constexpr double kRestingContactSpeed = 1e-3;
 /// approaching along the line of centres faster than kMinApproachSpeed.
 bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 
+/// Resolves a resting ball-ball contact (approach below kRestingContactSpeed) as a sustained
+/// contact: a finite force, small against the cloth's friction, so a ball that is rolling,
+/// spinning or at rest stays on the rolling manifold (w_xy = z^ x v / R) and answers an impulse
+/// P at its contact point r_c with dv = 5/(7m) (P_h - z^ x (r_c x P) / R), dw_z = (r_c x P)_z / I:
+/// exactly the impulse followed by its slide-to-roll (v - 2/7 u), with the slide's duration
+/// (at most 2 |u| / (7 mu_s g), about 0.1 ms) taken as zero. A sliding ball answers as a free
+/// ball, and a slide with slip below kRestingContactSpeed (it would end within 0.1 ms) ends at
+/// once; the spin about z the contact's friction gives a ball without side spin is taken by the
+/// cloth's spin friction at once (side spin is never reversed by it). The normal impulse is the
+/// plastic one for these effective masses (7/5 m on the rolling manifold, m sliding: no normal
+/// relative velocity after), friction as in CollideBalls (TP A-14, capped at sticking); every
+/// part only removes energy. Returns false when the balls are not approaching faster than
+/// kMinApproachSpeed. (The event engine, RestingContacts::kSustained in engine.h.)
+bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
+
+/// A ball that a sustained contact leaves rolling slower than RestingStopSpeed = sqrt(2 d mu_r
+/// g), d = kRestingStopDistance (0.14 mm/s at the defaults), stops at once (StopCreep): rolling
+/// resistance would stop it within sqrt(2 d / (mu_r g)) (1.4 ms) after rolling d. Only with
+/// rolling resistance on.
+inline constexpr double kRestingStopDistance = 1e-7;
+double RestingStopSpeed(const TableModel& model);
+/// Stops a rolling ball slower than RestingStopSpeed (see above); anything else is unchanged.
+void StopCreep(const TableModel& model, uint32_t effects, Ball* ball);
+
 /// Resolves a ball-cushion contact; `normal` is the horizontal unit normal pointing from the
 /// cushion towards the ball's centre. Does nothing (returns false) when the ball is not moving
 /// into the cushion.

@@ -37,6 +37,21 @@ std::span<const std::string_view> IntegratorNames();  ///< "euler", "semi_implic
 std::string_view EngineName(Engine e);
 using ode::IntegratorName;  ///< "euler", "semi_implicit_euler", "rk4" (and the others)
 
+/// Event engine: the treatment of resting ball-ball contacts (approach below
+/// kRestingContactSpeed, collision.h). See docs/billiards.md, "Resting contacts".
+enum class RestingContacts : uint8_t {
+  /// A sustained contact: a finite force, which the cloth answers. The plastic impulse acts
+  /// through the rolling constraint on a ball that rolls or rests (CollideBallsResting: the
+  /// impulse followed at once by the slide-to-roll it would cause), the cloth's other fast
+  /// answers (short slides, creeping rolls, side spin from the contact) are applied at once,
+  /// and the group of balls in contact is resolved together as one event (event_engine.h):
+  /// no micro-slides, no trains of transitions.
+  kSustained,
+  /// The free-ball plastic impulse (CollideBalls with e = 0): each hop of a push makes the
+  /// balls slide for microseconds (the behaviour before 2026-12, kept for comparison).
+  kHops,
+};
+
 struct SolverOptions {
   Engine engine = Engine::kEvent;
   Integrator integrator = Integrator::kRk4;
@@ -49,6 +64,8 @@ struct SolverOptions {
   /// events it records; the event engine counts every event it processes (collisions,
   /// transitions and the resting-contact pushes it does not report).
   int64_t max_events = 200000;
+  /// Event engine: how a ball-ball contact slower than kRestingContactSpeed is resolved.
+  RestingContacts resting_contacts = RestingContacts::kSustained;
 };
 
 /// Checks ranges, and that the engine can model the enabled effects.

@@ -6,6 +6,30 @@
 // in time (poly_roots.h): ball-ball contact |dr(t)| = 2R (quartic), a cushion line (quadratic)
 // or its rounded ends (quartic), pocket capture (quartic), leaving the table (quadratic), and
 // transitions (closed form, cloth.h). See docs/billiards.md, "The event engine".
+//
+// Resting contacts (RestingContacts::kSustained, the default; docs/billiards.md, "Resting
+// contacts"). A ball-ball contact closing slower than kRestingContactSpeed is not a collision
+// but a sustained contact: a finite force between balls that move together. Two ideas from the
+// event-driven literature carry it:
+// - A contact that recurs faster than the time scale of the contact itself cannot be treated as
+//   a sequence of independent instantaneous binary collisions: in a dissipative hard-sphere gas
+//   that sequence collapses (S. McNamara and W. R. Young, "Inelastic collapse in two
+//   dimensions", Phys. Rev. E 50, R28 (1994)), and the TC model of S. Luding and S. McNamara
+//   ("How to handle the inelastic collapse of a dissipative hard-sphere gas with the TC model",
+//   Granular Matter 1, 113 (1998)) changes the treatment of every collision that follows
+//   another of the same particle within a contact duration t_c. Here t_c is the time the cloth
+//   takes to answer a resting contact (a slide with less than 1 mm/s of slip ends within
+//   2 |u| / (7 mu_s g) < 0.1 ms; a 0.14 mm/s roll stops within 1.4 ms after 0.1 um; the side
+//   spin such a contact gives dies as fast): those answers are applied at the contact instant
+//   (CollideBallsResting, StopCreep), so they produce no events. Unlike TC we do not switch
+//   dissipation off (that would turn the plastic resting contacts elastic and make clusters
+//   bounce); we collapse the fast cloth answers, which only dissipates.
+// - The balls in contact are resolved together, as one event: every approaching pair of the
+//   group (balls linked by gaps below kSustainedRestingGap) by sweeps of plastic contact
+//   impulses (projected Gauss-Seidel, the simultaneous treatment of a resting contact group in
+//   rigid-body simulation), which moves a group pushed slowly as one body.
+// The previous treatment, free-ball plastic hops each followed by micro-slides, stays
+// reachable as RestingContacts::kHops.
 #ifndef SPORTSIM_SIM_BILLIARDS_EVENT_ENGINE_H_
 #define SPORTSIM_SIM_BILLIARDS_EVENT_ENGINE_H_
 
@@ -23,11 +47,17 @@ namespace sportsim::billiards {
 /// the push is resolved as a train of plastic hops instead of a Zeno cascade. 0.1 um moves
 /// nothing anyone can see.
 inline constexpr double kRestingGap = 1e-7;
+/// The largest resting gap (m) with sustained contacts (RestingContacts::kSustained): a push
+/// that the cloth closes slowly (rolling balls, a ball turning along another) then re-forms
+/// sqrt(10) times less often than at kRestingGap. 1 um is still far below anything visible and
+/// below the snooker referee's touching-ball distance (10 um).
+inline constexpr double kSustainedRestingGap = 1e-6;
 /// The smallest resting gap (m), for closing accelerations above 200 m/s^2 (extreme mu_s, g).
 inline constexpr double kMinRestingGap = 1e-9;
 
-/// A plastic contact between the same two bodies within this time (s) of the previous one
-/// continues a push (a train of hops) and is not reported again; the first one is.
+/// A plastic (resting or sustained) contact between the same two bodies within this time (s) of
+/// the previous one continues a push (a train of hops) and is not reported again; the first one
+/// is. A contact at or above kRestingContactSpeed ends every train of its balls.
 inline constexpr double kRestingTrain = 0.01;
 
 /// Predictions look at most this far ahead (s); a ball with nothing predicted within it is
@@ -40,6 +70,24 @@ inline constexpr double kPredictionHorizon = 1000.0;
 /// angle (rad), so its length is set per segment from the largest |w| in it (pieces are never
 /// shorter than 1/8192 s, so above 2048 rad/s they turn further).
 inline constexpr double kOrientationTurn = 0.25;
+
+/// What the event engine handled, by kind (instrumentation: benches and tests read it).
+struct EventEngineCounts {
+  int64_t ball_ball = 0;          ///< ball-ball contacts handled, of which:
+  int64_t ball_ball_plastic = 0;  ///<   approaching slower than kRestingContactSpeed
+  int64_t ball_ball_push = 0;     ///<   with no impulse (a touching pair the cloth closes)
+  int64_t cushion = 0;            ///< ball-cushion contacts handled, of which:
+  int64_t cushion_plastic = 0;    ///<   plastic or pushes
+  int64_t pocket = 0;             ///< captures and balls leaving an open table
+  int64_t transition = 0;         ///< predicted motion-state transitions (and horizon looks)
+  int64_t state_changes = 0;      ///< motion-state changes caused by contacts
+  int64_t predictions = 0;        ///< Predict() calls
+  int64_t sustained_contacts = 0; ///< pairs resolved as sustained contacts (HandleSustained)
+  int64_t sustained_sweeps = 0;   ///< sweeps over the groups of sustained contacts
+  int64_t group_balls = 0;        ///< balls in those groups, summed over the contacts
+};
+/// The counts of an event simulation; nullptr for another engine.
+const EventEngineCounts* EventCountsOf(const TableSimulation& sim);
 
 std::unique_ptr<TableSimulation> MakeEventSimulation(const TableModel& model,
                                                      const SolverOptions& options,

@@ -1,5 +1,5 @@
 """End to end: the real sportsim-server binary on a free loopback port, the real sportsim CLI
-against it, checking the JSON of DESIGN.md's command-line contract, exit codes and signals."""
+against it, checking the JSON of the command-line contract (docs/cli.md), exit codes and signals."""
 import csv
 import io
 import json
@@ -630,7 +630,7 @@ VERDICT_KEYS = {"foul", "reason", "points", "turn_passes", "respotted"}
 
 
 class GamesAgainstServer(unittest.TestCase):
-    """The games commands of the CLI against a server that referees (DESIGN.md "Games")."""
+    """The games commands of the CLI against a server that referees (docs/games.md)."""
 
     @classmethod
     def setUpClass(cls):
@@ -1108,6 +1108,150 @@ class ServerLifecycle(unittest.TestCase):
                 last = json.loads(out.splitlines()[-1])
                 self.assertFalse(last["at_rest"])  # the last snapshot, mid-shot
                 self.assertEqual(len(last["balls"]), 10)
+
+
+OUTCOME_KEYS = {"index", "sample", "events_handled", "first_contact", "pocketed", "pockets",
+                "t_rest_s", "balls", "events", "error"}
+
+
+class ShotBatchAgainstServer(unittest.TestCase):
+    """`sportsim shot batch`: strikes as JSON lines on stdin, outcomes as JSON lines on stdout."""
+
+    STRIKES = [{"ball_speed_mps": 3, "phi_deg": 0.3, "a": 0.1},
+               {"speed_mps": 2.5, "phi_deg": 10},
+               {"ballSpeedMps": 1.2, "phiDeg": -135, "b": -0.2},
+               {"ball_speed_mps": 6, "phi_deg": 0.1, "theta_deg": 5}]
+
+    @classmethod
+    def setUpClass(cls):
+        cls.server = ServerProcess(SERVER)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.__exit__()
+
+    def batch(self, strikes, *args):
+        text = strikes if isinstance(strikes, str) else \
+            "".join(json.dumps(s) + "\n" for s in strikes)
+        return subprocess.run([CLI, "--server", self.server.address, "shot", "batch", *args],
+                              input=text, capture_output=True, text=True, timeout=60)
+
+    def outcomes(self, r):
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return [json.loads(line) for line in r.stdout.splitlines()]
+
+    def test_one_outcome_a_line_in_input_order(self):
+        for fmt in ((), ("--format", "jsonl")):
+            out = self.outcomes(self.batch(self.STRIKES, "--rack", "9ball", *fmt))
+            self.assertEqual(len(out), 4)
+            for i, o in enumerate(out):
+                self.assertEqual(set(o), OUTCOME_KEYS)
+                self.assertEqual((o["index"], o["sample"]), (i, 0))
+                self.assertEqual(o["error"], "")
+                self.assertIsInstance(o["events_handled"], int)
+                self.assertGreater(o["t_rest_s"], 0)
+                self.assertEqual(o["balls"], [])
+                self.assertEqual(o["events"], [])
+                self.assertEqual(len(o["pocketed"]), len(o["pockets"]))
+            self.assertEqual(out[0]["first_contact"], "1")  # straight at the head ball
+
+    def test_outcomes_equal_shot_simulate(self):
+        out = self.outcomes(self.batch(self.STRIKES, "--rack", "9ball", "--outcome", "events"))
+        flags = {"ball_speed_mps": "--ball-speed", "speed_mps": "--speed", "phi_deg": "--phi",
+                 "theta_deg": "--theta", "a": "--a", "b": "--b", "ballSpeedMps": "--ball-speed",
+                 "phiDeg": "--phi"}
+        for strike, o in zip(self.STRIKES, out):
+            args = [a for k, v in strike.items() for a in (flags[k], str(v))]
+            r = cli(self.server.address, "shot", "simulate", "--rack", "9ball", *args,
+                    "--format", "json")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            want = json.loads(r.stdout)
+            self.assertEqual(o["t_rest_s"], want["t_rest_s"])  # the same double
+            self.assertEqual(o["balls"], want["balls"])
+            self.assertEqual(o["events"], want["events"])
+            pocketed = [e["balls"][0] for e in want["events"] if e["kind"] == "ball_pocket"]
+            self.assertEqual(o["pocketed"], pocketed)
+
+    def test_noise_samples_and_seed(self):
+        args = ("--rack", "9ball", "--samples", "3", "--noise", "1", "--seed", "5",
+                "--outcome", "final")
+        a = self.batch(self.STRIKES[:2], *args)
+        out = self.outcomes(a)
+        self.assertEqual([(o["index"], o["sample"]) for o in out],
+                         [(i, k) for i in range(2) for k in range(3)])
+        self.assertEqual(len({json.dumps(o["balls"]) for o in out[:3]}), 3)
+        self.assertEqual(self.batch(self.STRIKES[:2], *args).stdout, a.stdout)
+        other = self.batch(self.STRIKES[:2], *args[:-4], "--seed", "6", "--outcome", "final")
+        self.assertEqual(other.returncode, 0, other.stderr)
+        self.assertNotEqual(other.stdout, a.stdout)
+        final = self.outcomes(other)
+        self.assertEqual(len(final[0]["balls"]), 10)
+        self.assertEqual(final[0]["events"], [])
+
+    def test_setup_flags_and_a_strike_that_cannot_be_played(self):
+        strikes = ("# candidates\n"
+                   '{"ball_speed_mps": 2, "phi_deg": 0}\n'
+                   "\n"
+                   '{"ball_speed_mps": 2, "a": 0.9, "b": 0.9}\n'
+                   '{"ball_speed_mps": 2, "ball": "ghost"}\n'
+                   '{"ball_speed_mps": 2, "ball": "1", "phi_deg": 180}\n')
+        out = self.outcomes(self.batch(strikes, "--table", "pool-9ft", "--rack", "empty",
+                                       "--ball", "cue@-0.5,0", "--ball", "1@0,0",
+                                       "--disable", "spin_decay", "--engine", "event"))
+        self.assertEqual([o["index"] for o in out], [0, 1, 2, 3])
+        self.assertEqual(out[0]["error"], "")
+        self.assertEqual(out[0]["first_contact"], "1")
+        self.assertIn("miscue", out[1]["error"])
+        self.assertIn("ghost", out[2]["error"])
+        self.assertEqual(out[3]["error"], "")
+        self.assertEqual(out[3]["first_contact"], "cue")
+
+    def test_json_is_one_document(self):
+        r = self.batch(self.STRIKES[:2], "--format", "json")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        doc = json.loads(r.stdout)
+        self.assertEqual([o["index"] for o in doc["outcomes"]], [0, 1])
+        self.assertEqual(set(doc["outcomes"][0]), OUTCOME_KEYS)
+
+    def test_usage_errors(self):
+        good = [{"ball_speed_mps": 2}]
+        cases = [
+            ('{"ball_speed_mps": 2}\n{"ball_speed_mps": \n', (), "line 2"),
+            ('{"ball_speed_mps": 2, "spin": 1}\n', (), "line 1"),
+            ('{"phi_deg": 10}\n', (), "speed"),
+            ('{"ball_speed_mps": 2, "noise": 1}\n', (), "--noise"),
+            ('[1, 2]\n', (), "line 1"),
+            ("", (), "stdin"),
+            (good, ("--samples", "0"), "--samples"),
+            (good, ("--samples", "1001"), "--samples"),
+            (good, ("--noise", "101"), "--noise"),
+            (good, ("--outcome", "everything"), "--outcome"),
+            (good, ("--speed", "2"), "--speed"),
+            (good, ("--sample-rate", "100"), "--sample-rate"),
+            (good, ("--format", "csv"), "csv"),
+            (good, ("extra",), "extra"),
+            (good, ("--engine", "warp"), "--engine"),
+        ]
+        for strikes, args, needle in cases:
+            with self.subTest(args=args, strikes=strikes):
+                r = self.batch(strikes, *args)
+                self.assertEqual(r.returncode, 64, r.stderr)
+                self.assertIn("sportsim: usage:", r.stderr)
+                self.assertIn(needle, r.stderr)
+                self.assertEqual(r.stdout, "")
+
+    def test_server_errors_exit_with_the_code(self):
+        r = self.batch([{"ball_speed_mps": 2}], "--table", "no-such-table")
+        self.assertEqual(r.returncode, 3, r.stderr)  # INVALID_ARGUMENT
+        self.assertIn("INVALID_ARGUMENT", r.stderr)
+
+    def test_help_lists_the_flags(self):
+        r = subprocess.run([CLI, "shot", "batch", "--help"], capture_output=True, text=True,
+                           timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        for flag in ("--samples", "--noise", "--seed", "--outcome", "--table", "--rack", "--ball",
+                     "--param", "--disable", "--engine"):
+            self.assertIn(flag, r.stdout)
 
 
 if __name__ == "__main__":
