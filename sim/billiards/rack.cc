@@ -55,9 +55,10 @@ absl::StatusOr<std::vector<Ball>> MakeRack(std::string_view name, const TableMod
     if (!bounded) return absl::InvalidArgumentError("rack " + std::string(name) + " needs a table with cushions");
     balls.push_back(At("cue", head.x(), head.y(), radius));
     if (name == "8ball") {
-      // Apex ball on the foot spot, the 8 in the middle of the third row, a solid and a stripe
-      // in the back corners; the rest in a fixed mixed order.
-      const std::array<int, 15> order = {1, 9, 2, 10, 8, 3, 11, 4, 12, 5, 13, 6, 14, 7, 15};
+      // Apex ball on the foot spot, the 8 in the middle of the third row, a stripe and a solid
+      // in the two back corners (WPA 8-ball rack: one of each group in the corners); the rest
+      // in a fixed mixed order.
+      const std::array<int, 15> order = {1, 9, 2, 10, 8, 3, 11, 4, 12, 5, 13, 6, 14, 15, 7};
       int k = 0;
       for (int row = 0; row < 5; ++row) {
         for (int col = 0; col <= row; ++col) {

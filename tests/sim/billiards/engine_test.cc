@@ -66,6 +66,39 @@ bool SameBits(const TableState& a, const TableState& b) {
 // The tunnelling pitfall: 13 m/s at a 1/120 s step moves the ball 108 mm per step,
 // more than the 76 mm chord through a ball hit at an offset of 1.5 R. Without CCD some phases
 // of the step grid jump straight through; with CCD every phase collides.
+// WPA's 8-ball rack: the 8 in the middle of the third row, and one ball of each group in the
+// two back corners.
+TEST(RackTest, EightBallRackHasTheEightCentredAndOneOfEachGroupInTheBackCorners) {
+  const TableModel m = Model("pool-9ft");
+  absl::StatusOr<std::vector<Ball>> rack = MakeRack("8ball", m);
+  ASSERT_TRUE(rack.ok()) << rack.status();
+  double back_x = -1e9;
+  for (const Ball& b : *rack) back_x = std::max(back_x, b.r.x());
+  std::vector<int> corners;
+  double max_y = 0.0;
+  for (const Ball& b : *rack) {
+    if (std::abs(b.r.x() - back_x) < 1e-9) max_y = std::max(max_y, std::abs(b.r.y()));
+  }
+  for (const Ball& b : *rack) {
+    if (std::abs(b.r.x() - back_x) < 1e-9 && std::abs(std::abs(b.r.y()) - max_y) < 1e-9) {
+      corners.push_back(std::stoi(b.id));
+    }
+  }
+  ASSERT_EQ(corners.size(), 2u);
+  EXPECT_NE(corners[0] > 8, corners[1] > 8) << corners[0] << " and " << corners[1];
+  // The 8: third row (two rows behind the apex), centred.
+  const Ball* eight = nullptr;
+  const Ball* apex = nullptr;
+  for (const Ball& b : *rack) {
+    if (b.id == "8") eight = &b;
+    if (b.id == "1") apex = &b;
+  }
+  ASSERT_NE(eight, nullptr);
+  ASSERT_NE(apex, nullptr);
+  EXPECT_NEAR(eight->r.y(), 0.0, 1e-12);
+  EXPECT_NEAR(eight->r.x() - apex->r.x(), 2.0 * std::sqrt(3.0) * m.radius(), 1e-6);
+}
+
 // The engine can leave a ball at rest on a pocket's lip, between the jaws and beyond the rail
 // line (seen on the snooker table's side pocket); such a table must stay playable, while a
 // ball beyond a rail away from any pocket, or inside a jaw, is still refused.
