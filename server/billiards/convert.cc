@@ -71,6 +71,16 @@ absl::Status BoundShotWork(int64_t max_reply_bytes, ShotJob* job) {
 }
 
 absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
+  // Names are checked here, before the library sees them (its messages quote what they got).
+  if (!setup.preset().empty()) {
+    if (absl::Status s = CheckId("table.preset", setup.preset()); !s.ok()) return s;
+  }
+  if (!setup.rack().empty()) {
+    if (absl::Status s = CheckId("table.rack", setup.rack()); !s.ok()) return s;
+  }
+  for (const auto& [name, value] : setup.params()) {
+    if (absl::Status s = CheckId("table.params key", name); !s.ok()) return s;
+  }
   const std::string preset = setup.preset().empty() ? "pool-9ft" : setup.preset();
   absl::StatusOr<b::TableSpec> spec = b::MakeTablePreset(preset);
   if (!spec.ok()) return PrefixStatus("table.preset: ", spec.status());

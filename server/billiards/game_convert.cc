@@ -15,6 +15,12 @@ namespace g = ::sportsim::games;
 
 absl::StatusOr<GameSetup> GameSetupFromProto(const v1::GameConfig& game) {
   GameSetup setup;
+  if (!game.name().empty()) {
+    if (absl::Status s = CheckId("game.name", game.name()); !s.ok()) return s;
+  }
+  if (!game.start().empty()) {
+    if (absl::Status s = CheckId("game.start", game.start()); !s.ok()) return s;
+  }
   const std::string name = game.name().empty() ? "free" : game.name();
   absl::StatusOr<g::GameKind> kind = g::GameFromName(name);
   if (!kind.ok()) return PrefixStatus("game.name: ", kind.status());
@@ -47,10 +53,7 @@ absl::StatusOr<GameSetup> GameSetupFromProto(const v1::GameConfig& game) {
   std::sort(settings.begin(), settings.end());
   for (const auto& [k, v] : settings) {
     if (absl::Status s = CheckId("game.rules key", k); !s.ok()) return s;
-    if (v.size() > 32) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "game.rules[%s] must be at most 32 characters, got %d", Quote(k), v.size()));
-    }
+    if (absl::Status s = CheckId(absl::StrFormat("game.rules[%s]", k), v); !s.ok()) return s;
   }
   absl::StatusOr<g::Rules> rules = g::MakeRules(
       *kind, game.race_to() == 0 ? 1 : static_cast<int>(game.race_to()), game.shot_clock_s(),

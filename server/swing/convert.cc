@@ -304,6 +304,9 @@ absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r)
 
 absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
   StrikeJob job;
+  if (!b.club().empty()) {
+    if (absl::Status s = CheckId("ball.club", b.club()); !s.ok()) return s;
+  }
   const std::string club = b.club().empty() ? "driver" : b.club();
   absl::StatusOr<golf::ClubSpec> spec = golf::ClubPreset(club);
   if (!spec.ok()) return PrefixStatus("ball.club: ", spec.status());

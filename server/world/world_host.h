@@ -143,12 +143,12 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     if (absl::Status gone = Gone(); !gone.ok()) return gone;
     const bool admin = !admin_token.empty() && TokensEqual(admin_token, token);
-    const int seat = SeatOf(seats, token);
+    const int index = SeatOf(seats, token);
     if (admin) return kAdminSeat;
-    if (seat < 0) {
+    if (index < 0) {
       return absl::PermissionDeniedError(absl::StrFormat("token: not a seat of this %s", Kind::kNoun));
     }
-    return seat;
+    return index;
   }
   /// The tick the clock is at (never behind the last tick advanced).
   int64_t ClockTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -241,13 +241,7 @@ class WorldHost {
   absl::StatusOr<std::shared_ptr<WorldT>> Find(const std::string& id) {
     if (absl::Status s = CheckWorldId(id); !s.ok()) return s;
     absl::MutexLock lock(&mu_);
-    if (shut_down_) return Unavailable();
-    auto it = worlds_.find(id);
-    if (it == worlds_.end()) {
-      return absl::NotFoundError(
-          absl::StrFormat("%s: no %s %s", Kind::kIdField, Kind::kNoun, Quote(id)));
-    }
-    return it->second;
+    return FindLocked(id);
   }
 
   /// A seat's call: checks the token, finds the world, and under its lock authorizes the seat
@@ -277,6 +271,12 @@ class WorldHost {
     if (request.page_size > 1000) {
       return absl::InvalidArgumentError(
           absl::StrFormat("page_size must be in [0, 1000], got %d", request.page_size));
+    }
+    if (request.page_token.size() > 64) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "page_token must be a %s id from the previous page (at most 64 characters), got %d "
+          "characters",
+          Kind::kNoun, request.page_token.size()));
     }
     const size_t page = request.page_size == 0 ? 100 : static_cast<size_t>(request.page_size);
     std::vector<std::shared_ptr<WorldT>> worlds;
@@ -311,13 +311,9 @@ class WorldHost {
     std::shared_ptr<WorldT> world;
     {
       absl::MutexLock lock(&mu_);
-      if (shut_down_) return Unavailable();
-      auto it = worlds_.find(id);
-      if (it == worlds_.end()) {
-        return absl::NotFoundError(
-            absl::StrFormat("%s: no %s %s", Kind::kIdField, Kind::kNoun, Quote(id)));
-      }
-      world = it->second;
+      absl::StatusOr<std::shared_ptr<WorldT>> found = FindLocked(id);
+      if (!found.ok()) return found.status();
+      world = *std::move(found);
       {
         // The token is checked before anything changes.
         absl::MutexLock wlock(&world->mu);
@@ -325,7 +321,7 @@ class WorldHost {
         if (!seat.ok()) return seat.status();
         if (absl::Status s = may_delete(*world, *seat); !s.ok()) return s;
       }
-      worlds_.erase(it);
+      worlds_.erase(id);
     }
     Pump pump;
     {
@@ -559,6 +555,17 @@ class WorldHost {
   };
 
   static absl::Status Unavailable() { return absl::UnavailableError("the server is shutting down"); }
+
+  absl::StatusOr<std::shared_ptr<WorldT>> FindLocked(const std::string& id)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (shut_down_) return Unavailable();
+    auto it = worlds_.find(id);
+    if (it == worlds_.end()) {
+      return absl::NotFoundError(
+          absl::StrFormat("%s: no %s %s", Kind::kIdField, Kind::kNoun, Quote(id)));
+    }
+    return it->second;
+  }
 
   static absl::Status CheckWorldId(const std::string& id) {
     if (id.empty() || id.size() > 64) {

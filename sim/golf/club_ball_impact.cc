@@ -20,8 +20,10 @@ Vector3d DirectionFromAngles(double elevation_rad, double azimuth_rad) {
 }
 
 absl::Status ValidateDelivery(const ClubDelivery& d) {
+  // At least 0.1 m/s: a slower clubhead is no swing, and speeds near zero (subnormal ones
+  // included) turned the impact's ratios into NaN.
   if (auto s = CheckFiniteInRange("clubhead_speed_mps", d.clubhead_speed_mps,
-                                    0, true, 100, false);
+                                    0.1, false, 100, false);
       !s.ok())
     return s;
   if (auto s = CheckFiniteInRange("attack_angle_deg", d.attack_angle_deg, -45,

@@ -51,7 +51,7 @@ namespace sportsim::golf {
 
 /// How the club arrives at the ball (launch-monitor "club data").
 struct ClubDelivery {
-  double clubhead_speed_mps = 0.0;  ///< clubhead speed (m/s); (0, 100]
+  double clubhead_speed_mps = 0.0;  ///< clubhead speed (m/s); [0.1, 100]
   double attack_angle_deg = 0.0;    ///< club velocity elevation, + upward
                                     ///< (deg); [-45, 45]
   double club_path_deg = 0.0;       ///< club velocity azimuth, + right of the

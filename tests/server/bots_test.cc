@@ -1019,7 +1019,9 @@ class GrpcWebTest : public BotsTest {
     EXPECT_TRUE(http.Send(Post(path, body, text)));
     out.http = http.ReadAll();
     std::string bytes = out.http.body;
-    if (text) EXPECT_TRUE(DecodeText(out.http.body, &bytes)) << out.http.body;
+    if (text) {
+      EXPECT_TRUE(DecodeText(out.http.body, &bytes)) << out.http.body;
+    }
     std::vector<WebFrame> frames;
     EXPECT_TRUE(SplitFrames(bytes, &frames));
     for (const WebFrame& f : frames) {
@@ -1115,7 +1117,9 @@ TEST_F(GrpcWebTest, AServerStreamClosedByTheClientLeavesNoWatcher) {
       std::string piece;
       ASSERT_TRUE(http.ReadBodyPiece(&piece)) << "the stream ended after " << frames;
       std::string bytes = piece;
-      if (text) ASSERT_TRUE(DecodeText(piece, &bytes));
+      if (text) {
+        ASSERT_TRUE(DecodeText(piece, &bytes));
+      }
       pending += bytes;
       std::vector<WebFrame> split;
       if (!SplitFrames(pending, &split)) continue;  // a frame across pieces
