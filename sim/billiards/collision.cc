@@ -7,15 +7,28 @@
 
 namespace sportsim::billiards {
 
-bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
-  Eigen::Vector3d n = b->r - a->r;
-  n.z() = 0.0;
-  const double dist = n.norm();
+namespace {
+
+// The unit normal from a to b in the table plane and the speed at which they close along it;
+// false when they do not close (touching or parting balls, or coincident centres).
+bool Closing(const Ball& a, const Ball& b, Eigen::Vector3d* n, Eigen::Vector3d* v_rel,
+             double* approach) {
+  *n = b.r - a.r;
+  n->z() = 0.0;
+  const double dist = n->norm();
   if (dist == 0.0) return false;
-  n /= dist;
-  const Eigen::Vector3d v_rel = a->v - b->v;
-  const double approach = v_rel.dot(n);
-  if (approach <= kMinApproachSpeed) return false;
+  *n /= dist;
+  *v_rel = a.v - b.v;
+  *approach = v_rel->dot(*n);
+  return *approach > kMinApproachSpeed;
+}
+
+}  // namespace
+
+bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
+  Eigen::Vector3d n, v_rel;
+  double approach = 0.0;
+  if (!Closing(*a, *b, &n, &v_rel, &approach)) return false;
   const PhysicsParams& p = model.params();
   const double m = model.mass();
   const double radius = model.radius();
@@ -114,14 +127,9 @@ void StopCreep(const TableModel& model, uint32_t effects, Ball* b) {
 }
 
 bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
-  Eigen::Vector3d n = b->r - a->r;
-  n.z() = 0.0;
-  const double dist = n.norm();
-  if (dist == 0.0) return false;
-  n /= dist;
-  const Eigen::Vector3d v_rel = a->v - b->v;
-  const double approach = v_rel.dot(n);
-  if (approach <= kMinApproachSpeed) return false;
+  Eigen::Vector3d n, v_rel;
+  double approach = 0.0;
+  if (!Closing(*a, *b, &n, &v_rel, &approach)) return false;
   const PhysicsParams& p = model.params();
   const double m = model.mass();
   const double radius = model.radius();
