@@ -86,9 +86,6 @@ v1::TableEvent TableEvent(v1::EventKind kind, double t_s, uint64_t shot_id) {
 // A table that plays a ruled game (a referee decides what every shot means).
 bool Ruled(const Table& t) { return t.game_referee != nullptr; }
 
-// The seed of shot n's noise, from the table's secret seed.
-uint64_t ShotSeed(uint64_t seed, uint64_t shot) { return DeriveSeed(seed, shot); }
-
 // The ball a seat strikes: its own cue ball (three-cushion: seat 0 "cue", seat 1 "yellow").
 std::string StrikerBall(const Table& t, int seat) {
   return t.rules.game == games::GameKind::kThreeCushion && seat == 1 ? "yellow" : "cue";
@@ -128,10 +125,7 @@ void ApplyJudgement(Table& t, games::Judgement j, int64_t tick, uint64_t shot_id
   const uint32_t to_play = static_cast<uint32_t>(t.game.to_play);
   if (to_play != t.turn) {
     t.turn = to_play;
-    v1::TableEvent e;
-    e.set_kind(v1::turn);
-    e.set_t_s(t.WorldTime(tick));
-    e.set_shot_id(shot_id);
+    v1::TableEvent e = TableEvent(v1::turn, t.WorldTime(tick), shot_id);
     e.set_seat(t.turn);
     fresh->push_back(t.Log(std::move(e)));
   }
@@ -237,25 +231,6 @@ void ExpireShotClock(Table& t, std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCK
   t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShotClock, .tick = t.tick,
                                 .seat = seat, .verdict = j->verdict});
   ApplyJudgement(t, *std::move(j), t.tick, t.current.shot_id, fresh);
-}
-
-// A seat's call at rest comes after the shot clock's tick: the penalty takes effect first, at
-// its own tick, published; the call is then refused (the turn has changed). Decided by ticks
-// only, never by when a worker got to the table.
-absl::Status ShotClockFirst(TableHost& host, Table& t, Table::Pump* pump)
-    ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
-  if (!Ruled(t) || t.sim != nullptr || !t.clock_deadline.has_value()) return absl::OkStatus();
-  const int64_t deadline = *t.clock_deadline;
-  if (t.ClockTick(SteadyClock::now()) < deadline) return absl::OkStatus();
-  t.tick = std::max(t.tick, deadline);
-  ++t.sequence;
-  std::vector<EventPtr> fresh;
-  ExpireShotClock(t, &fresh);
-  host.CountEvents(fresh.size());
-  t.OfferAll(t.MakeFrame(t.tick, false), fresh, pump);
-  host.ScheduleRest(t);
-  return absl::FailedPreconditionError(absl::StrFormat(
-      "shot clock: it ran out at table time %.3f s, before this call", t.WorldTime(deadline)));
 }
 
 }  // namespace
@@ -460,7 +435,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
     absl::StatusOr<games::GameState> started =
         games::StartMatch(game->rules, *table->model, game->start, &build->state);
     if (!started.ok()) return PrefixStatus("game: ", started.status());
-    started->seed = ShotSeed(table->seed, 0);
+    started->seed = DeriveSeed(table->seed, 0);
     state = *std::move(started);
     if (game->start == games::Start::kBreak) table->rack = GameRack(game->rules.game);
   }
@@ -585,7 +560,7 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTable
       absl::StatusOr<games::GameState> started =
           games::StartMatch(t.rules, *t.model, t.start, &balls);
       if (!started.ok()) return PrefixStatus("game: ", started.status());
-      started->seed = ShotSeed(t.seed, 0);
+      started->seed = DeriveSeed(t.seed, 0);
       restarted = *std::move(started);
     }
     const int64_t tick = t.NowTick();
@@ -640,7 +615,6 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
           t.current.shot_id));
     }
     if (Ruled(t)) {
-      if (absl::Status s = ShotClockFirst(host_, t, &pump); !s.ok()) return s;
       // Ball in hand only: the seat that has it, its own cue ball, inside the zone.
       if (absl::Status s = t.game_referee->CheckPlacement(
               t.rules, *t.model, t.game, seat, t.rest, p.id(), Eigen::Vector2d(p.x_m(), p.y_m()));
@@ -729,7 +703,6 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
             "no shooter chooses");
       }
       if (t.sim == nullptr) {
-        if (absl::Status s = ShotClockFirst(host_, t, &pump); !s.ok()) return s;
         if (absl::Status s =
                 t.game_referee->CheckShot(t.rules, *t.model, t.game, seat, call, t.rest);
             !s.ok()) {
@@ -737,7 +710,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
         }
       }
       struck.noise = t.noise;
-      struck.seed = ShotSeed(t.seed, t.shots + 1);
+      struck.seed = DeriveSeed(t.seed, t.shots + 1);
     } else if (request.has_call()) {
       return absl::FailedPreconditionError("call: free play has no referee to call a shot to");
     }
@@ -912,8 +885,6 @@ absl::StatusOr<v1::ConcedeResponse> TableRegistry::Concede(const v1::ConcedeRequ
       return absl::FailedPreconditionError(
           "balls are still moving: concede when they are at rest");
     }
-    // A shot clock that ran out before the concession takes effect first.
-    (void)ShotClockFirst(host_, t, &pump);
     if (t.game.match_over()) {
       return absl::FailedPreconditionError("the match is over: nothing left to concede");
     }

@@ -255,6 +255,11 @@ class WorldHost {
     absl::StatusOr<R> result;
     {
       absl::MutexLock lock(&(*found)->mu);
+      // What fell due at rest before this call (a shot clock) takes effect first, at its own
+      // tick: ticks decide, not which worker or call got to the world first.
+      if (!Kind::Running(**found) && RestDeadline(**found, SteadyClock::now(), &pump)) {
+        ScheduleRest(**found);
+      }
       absl::StatusOr<int> seat = (*found)->Authorize(token);
       if (!seat.ok()) return seat.status();
       result = fn(*found, *seat, pump);
@@ -583,16 +588,18 @@ class WorldHost {
 
   // Stage 2a (at rest): what falls due at a tick while nothing moves (a shot clock), at that
   // very tick however late the wake, published like a tick.
-  void RestDeadline(WorldT& w, SteadyClock::time_point now, Pump* pump)
+  // Returns whether something fell due.
+  bool RestDeadline(WorldT& w, SteadyClock::time_point now, Pump* pump)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     const std::optional<int64_t> deadline = Kind::RestDeadline(w);
-    if (!deadline.has_value() || w.clock.DueTick(now) < *deadline) return;
+    if (!deadline.has_value() || w.clock.DueTick(now) < *deadline) return false;
     w.tick = std::max(w.tick, *deadline);
     ++w.sequence;
     std::vector<EventPtr> fresh;
     Kind::AtRestDeadline(*this, w, &fresh);
     CountEvents(fresh.size());
     w.OfferAll(w.MakeFrame(w.tick, false, true), fresh, pump);
+    return true;
   }
 
   // Stage 2b (at rest): a heartbeat for the readers.
