@@ -37,6 +37,9 @@ ABSL_FLAG(int, channels, 8, "Client connections the watchers share");
 ABSL_FLAG(int, workers, 0, "Tick workers (0: one per core)");
 ABSL_FLAG(std::string, engine, "event", "event or stepped");
 ABSL_FLAG(uint64_t, seed, 1, "Seed of the break speeds and angles");
+ABSL_FLAG(std::string, data_dir, "",
+          "Journal every command in SQLite in this directory (empty: no journal), to measure "
+          "what durability costs the ticks");
 
 namespace sportsim {
 namespace {
@@ -100,6 +103,7 @@ int Run() {
   config.tables.world.max_worlds = n + 1;
   config.tables.world.max_watchers = std::max(1, absl::GetFlag(FLAGS_watchers));
   config.tick_workers = absl::GetFlag(FLAGS_workers);
+  config.store.data_dir = absl::GetFlag(FLAGS_data_dir);
   absl::StatusOr<std::unique_ptr<server::ServerApp>> app = server::ServerApp::Start(config);
   if (!app.ok()) {
     std::fprintf(stderr, "sportsim-load: %s\n", std::string(app.status().message()).c_str());

@@ -1,6 +1,7 @@
 // sportsim-server: the authoritative sports-physics gRPC server.
 #include <pthread.h>
 #include <signal.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <iostream>
@@ -66,6 +67,20 @@ ABSL_FLAG(double, clock_rate, 1.0,
           "plays every world faster (tests, bots, replays). Outcomes depend on ticks only");
 ABSL_FLAG(int, watcher_backlog, 1024,
           "Unsent events a watcher may hold before it is resynced (full state, events lost)");
+ABSL_FLAG(std::string, data_dir, "",
+          "Keep every table and session in a journal (SQLite) in this directory, restored on "
+          "start; empty: everything in memory, lost when the process ends");
+ABSL_FLAG(std::string, store, "",
+          "Keep the journal in PostgreSQL instead (postgresql://user@host:port/db), for a fleet "
+          "of servers; --data_dir is then ignored");
+ABSL_FLAG(std::string, node, "",
+          "This server's name in the PostgreSQL store (its lease and its worlds); default: the "
+          "host name");
+ABSL_FLAG(absl::Duration, lease, absl::Seconds(10),
+          "PostgreSQL: how long this node's lease lasts unrenewed (renewed every third of it); "
+          "another server with --adopt takes its worlds over once it lapses");
+ABSL_FLAG(bool, adopt, false,
+          "PostgreSQL: take over (and keep watching for) the worlds of nodes whose lease lapsed");
 
 int main(int argc, char** argv) {
   absl::SetProgramUsageMessage(
@@ -159,6 +174,26 @@ int main(int argc, char** argv) {
                 << "], got " << c.value << "\n";
       return 2;
     }
+  }
+  config.store.data_dir = absl::GetFlag(FLAGS_data_dir);
+  config.store.postgres_uri = absl::GetFlag(FLAGS_store);
+  config.store.node = absl::GetFlag(FLAGS_node);
+  if (config.store.node.empty()) {
+    char host[256] = {};
+    config.store.node = gethostname(host, sizeof host - 1) == 0 && host[0] != 0 ? host : "local";
+  }
+  config.store.lease = absl::GetFlag(FLAGS_lease);
+  config.adopt = absl::GetFlag(FLAGS_adopt);
+  if (!config.store.postgres_uri.empty() &&
+      (config.store.lease < absl::Seconds(1) || config.store.lease > absl::Hours(1))) {
+    std::cerr << "sportsim-server: --lease must be in [1s, 1h], got "
+              << absl::FormatDuration(config.store.lease) << "\n";
+    return 2;
+  }
+  if (config.adopt && config.store.postgres_uri.empty()) {
+    std::cerr << "sportsim-server: --adopt needs --store postgresql://... (a single node's "
+                 "SQLite journal has no other nodes to adopt from)\n";
+    return 2;
   }
   if (const int port = absl::GetFlag(FLAGS_port); port >= 0) {
     absl::StatusOr<sportsim::server::ListenAddress> a =

@@ -152,10 +152,31 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
 
   std::unique_ptr<ServerApp> app(new ServerApp());
   app->host_ = address->host;
+  if (!config.store.data_dir.empty() || !config.store.postgres_uri.empty()) {
+    store::StoreOptions options = config.store;
+    options.clock_rate = config.tables.world.clock_rate;
+    absl::StatusOr<std::unique_ptr<store::Store>> opened = store::Store::Open(options);
+    if (!opened.ok()) return opened.status();
+    app->store_ = *std::move(opened);
+  }
+  app->adopt_ = config.adopt && app->store_ != nullptr;
   app->services_.push_back(MakeInfoService());
   app->scheduler_ = std::make_unique<TickScheduler>(config.tick_workers);
   app->tables_ = std::make_unique<TableRegistry>(config.tables, app->scheduler_.get());
   app->sessions_ = std::make_unique<SessionRegistry>(config.sessions, app->scheduler_.get());
+  if (app->store_ != nullptr) {
+    app->tables_->SetJournal(app->store_.get());
+    app->sessions_->SetJournal(app->store_.get());
+    // Every world of this node comes back before the first call is served.
+    absl::StatusOr<std::vector<StoredWorld>> mine = app->store_->Load();
+    if (!mine.ok()) return mine.status();
+    app->RestoreWorlds(*mine);
+    if (app->adopt_) {
+      absl::StatusOr<std::vector<StoredWorld>> adopted = app->store_->Adopt();
+      if (!adopted.ok()) return adopted.status();
+      app->RestoreWorlds(*adopted);
+    }
+  }
   app->pool_ = std::make_unique<WorkPool>(config.work);
   app->services_.push_back(MakeSwingService(app->sessions_.get(), app->pool_.get()));
   app->services_.push_back(MakeBilliardsService(app->tables_.get(), app->pool_.get(),
@@ -217,7 +238,77 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
     app->web_ = *std::move(web);
   }
   app->server_->GetHealthCheckService()->SetServingStatus(true);
+  if (app->store_ != nullptr) {
+    const absl::Duration adopt_every = config.store.lease / 2;
+    ServerApp* self = app.get();
+    app->monitor_ = std::thread([self, adopt_every] { self->MonitorStore(adopt_every); });
+  }
   return app;
+}
+
+void ServerApp::RestoreWorlds(const std::vector<StoredWorld>& worlds) {
+  const absl::Time start = absl::Now();
+  RestoreReport r;
+  for (const StoredWorld& w : worlds) {
+    absl::Status s;
+    if (w.kind == "table") {
+      s = tables_->Restore(w);
+      r.tables += s.ok();
+    } else if (w.kind == "session") {
+      s = sessions_->Restore(w);
+      r.sessions += s.ok();
+    } else {
+      s = absl::DataLossError(absl::StrFormat("%s: unknown kind %s", w.world_id, w.kind));
+    }
+    if (!s.ok()) {
+      ++r.failed;
+      std::cerr << "sportsim-server: not restored: " << s.message() << "\n";
+    }
+  }
+  r.seconds = absl::ToDoubleSeconds(absl::Now() - start);
+  if (!worlds.empty()) {
+    std::cerr << absl::StrFormat(
+        "sportsim-server: restored %d tables and %d sessions from %s in %.3f s%s\n", r.tables,
+        r.sessions, store_->Describe(), r.seconds,
+        r.failed > 0 ? absl::StrFormat(" (%d failed)", r.failed) : "");
+  }
+  absl::MutexLock lock(&monitor_mu_);
+  restored_.tables += r.tables;
+  restored_.sessions += r.sessions;
+  restored_.failed += r.failed;
+  restored_.seconds += r.seconds;
+}
+
+RestoreReport ServerApp::restored() const {
+  absl::MutexLock lock(&monitor_mu_);
+  return restored_;
+}
+
+void ServerApp::MonitorStore(absl::Duration adopt_every) {
+  bool serving = true;
+  absl::Time next_adopt = absl::Now() + adopt_every;
+  absl::MutexLock lock(&monitor_mu_);
+  for (;;) {
+    monitor_mu_.AwaitWithTimeout(absl::Condition(&monitor_stop_), absl::Milliseconds(100));
+    if (monitor_stop_) return;
+    monitor_mu_.Unlock();
+    // Health answers NOT_SERVING while no command can be made durable.
+    const bool healthy = store_->Healthy().ok();
+    if (healthy != serving && !shut_down_.load()) {
+      server_->GetHealthCheckService()->SetServingStatus(healthy);
+      serving = healthy;
+    }
+    if (adopt_ && healthy && absl::Now() >= next_adopt) {
+      next_adopt = absl::Now() + adopt_every;
+      absl::StatusOr<std::vector<StoredWorld>> adopted = store_->Adopt();
+      if (adopted.ok()) {
+        RestoreWorlds(*adopted);
+      } else {
+        std::cerr << "sportsim-server: adopt: " << adopted.status().message() << "\n";
+      }
+    }
+    monitor_mu_.Lock();
+  }
 }
 
 ServerApp::~ServerApp() {
@@ -225,6 +316,8 @@ ServerApp::~ServerApp() {
   Wait();
   // No wake may reach a registry being destroyed.
   if (scheduler_ != nullptr) scheduler_->Stop();
+  // The journal goes last: no call is left to write to it.
+  if (store_ != nullptr) store_->Close();
 }
 
 int ServerApp::http_port() const { return web_ != nullptr ? web_->port() : 0; }
@@ -238,6 +331,13 @@ std::string ServerApp::address() const {
 
 void ServerApp::Shutdown(absl::Duration grace) {
   if (server_ == nullptr || shut_down_.exchange(true)) return;
+  if (monitor_.joinable()) {
+    {
+      absl::MutexLock lock(&monitor_mu_);
+      monitor_stop_ = true;
+    }
+    monitor_.join();
+  }
   server_->GetHealthCheckService()->SetServingStatus(false);
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
   sessions_->Shutdown(absl::UnavailableError("the server is shutting down"));

@@ -3,15 +3,18 @@
 #define SPORTSIM_SERVER_SERVER_APP_H_
 
 #include <atomic>
+#include <thread>
 #include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/app/metrics.h"
 #include "server/rpc/grpc_web.h"
+#include "server/store/store.h"
 #include "server/swing/session_world.h"
 #include "server/world/work_pool.h"
 #include "server/billiards/table_world.h"
@@ -49,6 +52,18 @@ struct ServerConfig {
   int http_max_streams_per_client = 4;
   WorkLimits work;  ///< the simulation pool (--sim_workers, --max_queued_simulations,
                     ///< --max_request_cpu)
+  /// The journal (--data_dir, --store, --node, --lease): none when both data_dir and
+  /// postgres_uri are empty (everything in memory).
+  store::StoreOptions store;
+  bool adopt = false;  ///< --adopt: take over the worlds of nodes whose lease lapsed
+};
+
+/// What a start restored from the journal.
+struct RestoreReport {
+  int tables = 0;
+  int sessions = 0;
+  int failed = 0;        ///< worlds that could not be restored (logged, left in the store)
+  double seconds = 0.0;  ///< wall time of the restore
 };
 
 /// Routes libprotobuf's per-message error lines (malformed requests) to a counter instead of
@@ -83,6 +98,10 @@ class ServerApp {
   SessionRegistry& sessions() { return *sessions_; }
   WorkPool& pool() { return *pool_; }
   std::string address() const;
+  /// The journal, or null when everything is in memory.
+  store::Store* journal() { return store_.get(); }
+  /// What the start restored (and, with --adopt, every takeover since).
+  RestoreReport restored() const;
 
   /// Marks health NOT_SERVING, ends every WatchTable stream (UNAVAILABLE after a last
   /// snapshot), stops accepting, lets in-flight calls finish for up to `grace`, then cancels
@@ -93,6 +112,12 @@ class ServerApp {
 
  private:
   ServerApp() = default;
+  /// Restores `worlds` into the registries (a start, a takeover).
+  void RestoreWorlds(const std::vector<StoredWorld>& worlds);
+  /// Health follows the journal's; with --adopt, takes over lapsed nodes' worlds.
+  void MonitorStore(absl::Duration adopt_every);
+
+  std::unique_ptr<store::Store> store_;       // closed after the server stopped calling it
   std::unique_ptr<TickScheduler> scheduler_;  // stopped before the registries go
   std::unique_ptr<WorkPool> pool_;            // outlives the services that queue on it
   std::unique_ptr<TableRegistry> tables_;  // the registries outlive the services
@@ -105,6 +130,11 @@ class ServerApp {
   std::string host_;
   int port_ = 0;
   std::atomic<bool> shut_down_{false};
+  bool adopt_ = false;
+  mutable absl::Mutex monitor_mu_;
+  bool monitor_stop_ ABSL_GUARDED_BY(monitor_mu_) = false;
+  RestoreReport restored_ ABSL_GUARDED_BY(monitor_mu_);
+  std::thread monitor_;
 };
 
 }  // namespace sportsim::server

@@ -7,8 +7,10 @@
 #include "absl/strings/str_format.h"
 #include "server/billiards/convert.h"
 #include "server/billiards/game_convert.h"
+#include "server/billiards/table_checkpoint.h"
 #include "server/world/event_log.h"
 #include "server/world/watcher_impl.h"
+#include "sportsim/store/v1/journal.pb.h"
 #include "server/world/world.h"
 #include "sim/billiards/cue.h"
 #include "sim/billiards/engine.h"
@@ -235,6 +237,55 @@ void ExpireShotClock(Table& t, std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCK
 
 }  // namespace
 
+namespace {
+
+// A checkpoint every few shots bounds what a restore replays (at most this many shots, each
+// ~0.1 ms) while keeping what is written per shot small: a checkpoint holds the match record,
+// ~200 bytes a shot, so writing one every shot would cost O(shots^2) bytes over a match.
+constexpr uint64_t kCheckpointEveryShots = 4;
+
+// At rest after a shot's end: the table as a checkpoint covering its journal so far.
+void Checkpoint(TableHost& host, Table& t) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  Journal* journal = host.journal();
+  if (journal == nullptr || t.restoring || t.sim != nullptr ||
+      t.shots % kCheckpointEveryShots != 0) {
+    return;
+  }
+  const TableRestState state{.tick = t.tick,
+                             .sequence = t.sequence,
+                             .turn = t.turn,
+                             .rest = t.rest,
+                             .last_shot = t.last_shot,
+                             .shots = t.shots,
+                             .game = t.game,
+                             .placed = t.placed,
+                             .clock_deadline = t.clock_deadline,
+                             .record = t.record};
+  journal->Checkpoint(t.id, t.journal_index, t.tick, EncodeTableRestState(state));
+}
+
+// A restore from a checkpoint: the table at rest as it was.
+absl::Status LoadCheckpoint(Table& t, const std::string& bytes)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
+  absl::StatusOr<TableRestState> state = DecodeTableRestState(bytes);
+  if (!state.ok()) return state.status();
+  t.tick = state->tick;
+  t.sequence = state->sequence;
+  t.turn = state->turn;
+  t.rest = std::move(state->rest);
+  t.last_shot = std::move(state->last_shot);
+  t.current = t.last_shot;  // at rest, the current shot is the last one
+  t.shots = state->shots;
+  t.game = std::move(state->game);
+  t.placed = state->placed;
+  t.clock_deadline = state->clock_deadline;
+  t.record = std::move(state->record);
+  if (Ruled(t)) RefreshGameView(t);
+  return absl::OkStatus();
+}
+
+}  // namespace
+
 bool TableKind::Running(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS { return t.sim != nullptr; }
 
 std::optional<TableKind::End> TableKind::AdvanceTick(TableHost& /*host*/, Table& t, int64_t k,
@@ -261,6 +312,7 @@ void TableKind::Publish(TableHost& /*host*/, Table& t, TickOut* out,
 void TableKind::EndRun(TableHost& host, Table& t, const End& end, std::vector<EventPtr>* fresh,
                        Table::Pump* /*pump*/) {
   EndShot(host, t, t.tick, end, fresh);
+  Checkpoint(host, t);
 }
 
 std::optional<int64_t> TableKind::RestDeadline(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS {
@@ -352,6 +404,31 @@ TableRegistry::~TableRegistry() { Shutdown(absl::UnavailableError("the server is
 
 absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
     const v1::CreateTableRequest& request) {
+  const std::shared_ptr<Table> table = host_.Make();
+  std::vector<std::string> tokens;
+  absl::StatusOr<v1::CreateTableResponse> made = MakeTable(request, std::nullopt, *table, &tokens);
+  if (!made.ok()) return made.status();
+  v1::CreateTableResponse response = *std::move(made);
+  const std::string admin_token = RandomHex(16);
+  table->admin_token_hash = HashToken(admin_token);
+  SeatsToProto(table->seats, &tokens, response.mutable_seats());
+  response.set_admin_token(admin_token);
+  ::sportsim::store::v1::TableCreated created;
+  created.set_request(table->create_request);
+  created.set_seed(table->seed);
+  if (absl::Status s = host_.Add(table, created.SerializeAsString()); !s.ok()) return s;
+  response.set_table_id(table->id);
+  // A clock that runs while nobody shoots needs a wake at its deadline.
+  if (Ruled(*table) && table->rules.shot_clock_s > 0) {
+    absl::MutexLock lock(&table->mu);
+    host_.ScheduleRest(*table);
+  }
+  return response;
+}
+
+absl::StatusOr<v1::CreateTableResponse> TableRegistry::MakeTable(
+    const v1::CreateTableRequest& request, std::optional<uint64_t> seed, Table& made,
+    std::vector<std::string>* tokens) {
   const double tick_hz = request.tick_hz() == 0 ? 120.0 : request.tick_hz();
   if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 1000, false); !s.ok()) {
     return s;
@@ -366,7 +443,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
         std::max<int>(static_cast<int>(request.seats()), request.seat_names_size())));
   }
   absl::StatusOr<std::vector<SeatEntry>> seats =
-      MakeSeats(request.seats(), request.seat_names(), /*default_count=*/2);
+      MakeSeats(request.seats(), request.seat_names(), /*default_count=*/2, tokens);
   if (!seats.ok()) return seats.status();
   v1::TableSetup setup = request.table();
   if (ruled) {
@@ -391,7 +468,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
     }
   }
 
-  const std::shared_ptr<Table> table = host_.Make();
+  Table* const table = &made;
   table->tick_hz = tick_hz;
   table->period_s = 1.0 / tick_hz;
   table->max_shot_s = limits_.max_shot_s;
@@ -424,7 +501,9 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   table->rules = game->rules;
   table->start = game->start;
   table->noise = game->noise;
-  table->seed = game->seed.has_value() ? *game->seed : RandomSeed();
+  table->seed = seed.has_value()         ? *seed
+                : game->seed.has_value() ? *game->seed
+                                         : RandomSeed();
   std::optional<games::GameState> state;
   if (ruled) {
     table->game_referee = games::RefereeFor(game->rules.game);
@@ -443,10 +522,7 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
   table->create_request = request.SerializeAsString();
   table->aim_lines = !request.has_aim_lines() || request.aim_lines();
   v1::CreateTableResponse response;
-  table->seats = *std::move(seats);
-  table->admin_token = RandomHex(16);
-  SeatsToProto(table->seats, /*with_tokens=*/true, response.mutable_seats());
-  response.set_admin_token(table->admin_token);
+  if (table->seats.empty()) table->seats = *std::move(seats);  // a restore keeps its own
   {
     absl::MutexLock lock(&table->mu);
     table->clock.tick_hz = tick_hz * host_.limits().clock_rate;
@@ -460,17 +536,10 @@ absl::StatusOr<v1::CreateTableResponse> TableRegistry::Create(
       *response.mutable_game() = *table->game_view;
     }
   }
-  if (absl::Status s = host_.Add(table); !s.ok()) return s;
-  response.set_table_id(table->id);
   response.set_tick_hz(tick_hz);
   response.set_engine(std::string(b::EngineName(solver->engine)));
   if (solver->engine == b::Engine::kStepped) response.set_dt_s(solver->dt_s);
   response.set_tick(0);
-  // A clock that runs while nobody shoots needs a wake at its deadline.
-  if (ruled && game->rules.shot_clock_s > 0) {
-    absl::MutexLock lock(&table->mu);
-    host_.ScheduleRest(*table);
-  }
   return response;
 }
 
@@ -490,7 +559,7 @@ absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& requ
   info.set_sequence(t.sequence);
   info.set_at_rest(t.sim == nullptr);
   info.set_turn(t.turn);
-  SeatsToProto(t.seats, /*with_tokens=*/false, info.mutable_seats());
+  SeatsToProto(t.seats, nullptr, info.mutable_seats());
   for (const b::Ball& ball : Balls(t).balls) BallToProto(*t.model, ball, info.add_balls());
   info.set_shots(t.shots);
   if (t.shots > 0) ShotSummaryToProto(t.last_shot, info.mutable_last_shot());
@@ -539,58 +608,69 @@ absl::Status TableRegistry::Delete(const v1::DeleteTableRequest& request) {
           ABSL_NO_THREAD_SAFETY_ANALYSIS {
         if (t.sim != nullptr) host_.RunEnded();
         t.sim = nullptr;
-      });
+      },
+      static_cast<uint32_t>(TableCommand::kDelete), JournalBody(request));
 }
 
 absl::StatusOr<v1::ResetTableResponse> TableRegistry::Reset(const v1::ResetTableRequest& request) {
   return host_.Act<v1::ResetTableResponse>(
       request.table_id(), request.token(),
-      [&](const std::shared_ptr<Table>& ptr, int seat,
-          Table::Pump& pump) -> absl::StatusOr<v1::ResetTableResponse> {
-    Table& t = *ptr;
-    v1::ResetTableResponse response;
-    if (Ruled(t) && seat != kAdminSeat) {
-      return absl::PermissionDeniedError(
-          "token: in a ruled game only the admin token resets the table");
-    }
-    std::optional<games::GameState> restarted;
-    b::TableState balls = t.initial;
-    if (Ruled(t)) {
-      // The match starts again from the creation's start.
-      absl::StatusOr<games::GameState> started =
-          games::StartMatch(t.rules, *t.model, t.start, &balls);
-      if (!started.ok()) return PrefixStatus("game: ", started.status());
-      started->seed = DeriveSeed(t.seed, 0);
-      restarted = *std::move(started);
-    }
-    const int64_t tick = t.NowTick();
-    ++t.sequence;
-    std::vector<EventPtr> fresh;
-    if (t.sim != nullptr) {
-      // A ruled game restarts: the interrupted shot is void, not judged.
-      EndShot(host_, t, tick,
-              TableKind::End{.error = "the table was reset during the shot", .voided = Ruled(t)},
-              &fresh);
-      host_.AfterRunEndedByCall(t);
-    }
-    t.rest = std::move(balls);
-    t.tick = tick;
-    t.placed = false;
-    v1::TableEvent e = TableEvent(v1::table_reset, t.WorldTime(tick), 0);
-    if (seat >= 0) e.set_seat(static_cast<uint32_t>(seat));
-    fresh.push_back(t.Log(std::move(e)));
-    if (restarted.has_value()) {
-      t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kReset, .tick = tick, .seat = seat});
-      ApplyJudgement(t, games::Judgement{.state = *std::move(restarted)}, tick, 0, &fresh);
-      host_.ScheduleRest(t);
-    }
-    host_.CountEvents(fresh.size());
-    const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
-    t.OfferAll(frame, fresh, &pump);
-    response.set_sequence(t.sequence);
-    response.set_tick(tick);
-    return response;
-  });
+      [&](const std::shared_ptr<Table>& ptr, int seat, Table::Pump& pump) {
+        return ResetOn(*ptr, seat, request, pump);
+      });
+}
+
+absl::StatusOr<v1::ResetTableResponse> TableRegistry::ResetOn(Table& t, int seat,
+                                                   const v1::ResetTableRequest& request,
+                                                   Table::Pump& pump) {
+  const int asked = seat;
+  v1::ResetTableResponse response;
+  if (Ruled(t) && seat != kAdminSeat) {
+    return absl::PermissionDeniedError(
+        "token: in a ruled game only the admin token resets the table");
+  }
+  std::optional<games::GameState> restarted;
+  b::TableState balls = t.initial;
+  if (Ruled(t)) {
+    // The match starts again from the creation's start.
+    absl::StatusOr<games::GameState> started =
+        games::StartMatch(t.rules, *t.model, t.start, &balls);
+    if (!started.ok()) return PrefixStatus("game: ", started.status());
+    started->seed = DeriveSeed(t.seed, 0);
+    restarted = *std::move(started);
+  }
+  if (absl::Status s = host_.Commit(t, asked, static_cast<uint32_t>(TableCommand::kReset),
+                                    JournalBody(request));
+      !s.ok()) {
+    return s;
+  }
+  const int64_t tick = t.NowTick();
+  ++t.sequence;
+  std::vector<EventPtr> fresh;
+  if (t.sim != nullptr) {
+    // A ruled game restarts: the interrupted shot is void, not judged.
+    EndShot(host_, t, tick,
+            TableKind::End{.error = "the table was reset during the shot", .voided = Ruled(t)},
+            &fresh);
+    host_.AfterRunEndedByCall(t);
+  }
+  t.rest = std::move(balls);
+  t.tick = tick;
+  t.placed = false;
+  v1::TableEvent e = TableEvent(v1::table_reset, t.WorldTime(tick), 0);
+  if (seat >= 0) e.set_seat(static_cast<uint32_t>(seat));
+  fresh.push_back(t.Log(std::move(e)));
+  if (restarted.has_value()) {
+    t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kReset, .tick = tick, .seat = seat});
+    ApplyJudgement(t, games::Judgement{.state = *std::move(restarted)}, tick, 0, &fresh);
+    host_.ScheduleRest(t);
+  }
+  host_.CountEvents(fresh.size());
+  const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
+  t.OfferAll(frame, fresh, &pump);
+  response.set_sequence(t.sequence);
+  response.set_tick(tick);
+  return response;
 }
 
 absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRequest& request) {
@@ -602,72 +682,83 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::Place(const v1::PlaceBallRe
   }
   return host_.Act<v1::PlaceBallResponse>(
       request.table_id(), request.token(),
-      [&](const std::shared_ptr<Table>& ptr, int seat,
-          Table::Pump& pump) -> absl::StatusOr<v1::PlaceBallResponse> {
-    Table& t = *ptr;
-    absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/!Ruled(t));
-    if (!acting.ok()) return acting.status();
-    seat = *acting;
-    v1::PlaceBallResponse response;
-    if (t.sim != nullptr) {
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "balls are still moving (shot %d); place balls when every ball is at rest",
-          t.current.shot_id));
+      [&](const std::shared_ptr<Table>& ptr, int seat, Table::Pump& pump) {
+        return PlaceOn(*ptr, seat, request, pump);
+      });
+}
+
+absl::StatusOr<v1::PlaceBallResponse> TableRegistry::PlaceOn(Table& t, int seat,
+                                                   const v1::PlaceBallRequest& request,
+                                                   Table::Pump& pump) {
+  const int asked = seat;
+  const v1::BallPlacement& p = request.ball();
+  absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/!Ruled(t));
+  if (!acting.ok()) return acting.status();
+  seat = *acting;
+  v1::PlaceBallResponse response;
+  if (t.sim != nullptr) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "balls are still moving (shot %d); place balls when every ball is at rest",
+        t.current.shot_id));
+  }
+  if (Ruled(t)) {
+    // Ball in hand only: the seat that has it, its own cue ball, inside the zone.
+    if (absl::Status s = t.game_referee->CheckPlacement(
+            t.rules, *t.model, t.game, seat, t.rest, p.id(), Eigen::Vector2d(p.x_m(), p.y_m()));
+        !s.ok()) {
+      return s;
     }
-    if (Ruled(t)) {
-      // Ball in hand only: the seat that has it, its own cue ball, inside the zone.
-      if (absl::Status s = t.game_referee->CheckPlacement(
-              t.rules, *t.model, t.game, seat, t.rest, p.id(), Eigen::Vector2d(p.x_m(), p.y_m()));
-          !s.ok()) {
-        return s;
-      }
+  }
+  b::TableState state = t.rest;
+  int k = state.Find(p.id());
+  if (k < 0) {
+    if (static_cast<int>(state.balls.size()) >= kMaxBalls) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("ball.id: a table holds at most %d balls", kMaxBalls));
     }
-    b::TableState state = t.rest;
-    int k = state.Find(p.id());
-    if (k < 0) {
-      if (static_cast<int>(state.balls.size()) >= kMaxBalls) {
-        return absl::InvalidArgumentError(
-            absl::StrFormat("ball.id: a table holds at most %d balls", kMaxBalls));
-      }
-      state.balls.push_back(b::Ball{.id = p.id()});
-      k = static_cast<int>(state.balls.size()) - 1;
+    state.balls.push_back(b::Ball{.id = p.id()});
+    k = static_cast<int>(state.balls.size()) - 1;
+  }
+  b::Ball& ball = state.balls[k];
+  ball.r = Eigen::Vector3d(p.x_m(), p.y_m(), t.model->radius());
+  ball.v.setZero();
+  ball.w.setZero();
+  ball.state = b::MotionState::kStationary;
+  ball.pocket = -1;
+  if (absl::Status s = b::ValidateLayout(*t.model, state); !s.ok()) {
+    return PrefixStatus("ball: ", s);
+  }
+  for (const b::Pocket& pocket : t.model->spec().pockets) {
+    if ((ball.r.head<2>() - pocket.centre).norm() < pocket.radius_m) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "ball: (%g, %g) m is inside pocket %s's capture circle", p.x_m(), p.y_m(),
+          pocket.name));
     }
-    b::Ball& ball = state.balls[k];
-    ball.r = Eigen::Vector3d(p.x_m(), p.y_m(), t.model->radius());
-    ball.v.setZero();
-    ball.w.setZero();
-    ball.state = b::MotionState::kStationary;
-    ball.pocket = -1;
-    if (absl::Status s = b::ValidateLayout(*t.model, state); !s.ok()) {
-      return PrefixStatus("ball: ", s);
-    }
-    for (const b::Pocket& pocket : t.model->spec().pockets) {
-      if ((ball.r.head<2>() - pocket.centre).norm() < pocket.radius_m) {
-        return absl::InvalidArgumentError(absl::StrFormat(
-            "ball: (%g, %g) m is inside pocket %s's capture circle", p.x_m(), p.y_m(),
-            pocket.name));
-      }
-    }
-    const int64_t tick = t.ClockTick(SteadyClock::now());
-    t.tick = tick;
-    t.rest = std::move(state);
-    ++t.sequence;
-    if (Ruled(t)) {
-      t.placed = true;
-      t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kPlace, .tick = tick, .seat = seat,
-                                    .ball = p.id(), .x_m = p.x_m(), .y_m = p.y_m()});
-    }
-    v1::TableEvent e = TableEvent(v1::ball_placed, t.WorldTime(tick), 0);
-    e.set_seat(static_cast<uint32_t>(seat));
-    e.add_balls(p.id());
-    std::vector<EventPtr> fresh{t.Log(std::move(e))};
-    host_.CountEvents(1);
-    const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
-    t.OfferAll(frame, fresh, &pump);
-    response.set_sequence(t.sequence);
-    response.set_tick(tick);
-    return response;
-  });
+  }
+  if (absl::Status s = host_.Commit(t, asked, static_cast<uint32_t>(TableCommand::kPlace),
+                                    JournalBody(request));
+      !s.ok()) {
+    return s;
+  }
+  const int64_t tick = t.ClockTick(SteadyClock::now());
+  t.tick = tick;
+  t.rest = std::move(state);
+  ++t.sequence;
+  if (Ruled(t)) {
+    t.placed = true;
+    t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kPlace, .tick = tick, .seat = seat,
+                                  .ball = p.id(), .x_m = p.x_m(), .y_m = p.y_m()});
+  }
+  v1::TableEvent e = TableEvent(v1::ball_placed, t.WorldTime(tick), 0);
+  e.set_seat(static_cast<uint32_t>(seat));
+  e.add_balls(p.id());
+  std::vector<EventPtr> fresh{t.Log(std::move(e))};
+  host_.CountEvents(1);
+  const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
+  t.OfferAll(frame, fresh, &pump);
+  response.set_sequence(t.sequence);
+  response.set_tick(tick);
+  return response;
 }
 
 absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& request) {
@@ -676,155 +767,178 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::Shoot(const v1::ShootRequest& r
   if (!strike.ok()) return strike.status();
   return host_.Act<v1::ShootResponse>(
       request.table_id(), request.token(),
-      [&](const std::shared_ptr<Table>& ptr, int seat,
-          Table::Pump& pump) -> absl::StatusOr<v1::ShootResponse> {
-    Table& t = *ptr;
-    absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/!Ruled(t));
-    if (!acting.ok()) return acting.status();
-    seat = *acting;
-    v1::ShootResponse response;
-    b::CueStrike struck = *strike;
-    absl::StatusOr<games::ShotCall> parsed = ShotCallFromProto(request.call());
-    if (!parsed.ok()) return parsed.status();
-    const games::ShotCall call = *std::move(parsed);
-    if (Ruled(t)) {
-      if (request.has_next_seat()) {
-        return absl::FailedPreconditionError(
-            "next_seat: in a ruled game the referee decides who plays next");
-      }
-      const std::string own = StrikerBall(t, seat);
-      if (!request.strike().ball().empty() && request.strike().ball() != own) {
-        return absl::FailedPreconditionError(absl::StrFormat(
-            "strike.ball: seat %d strikes only its own cue ball \"%s\"", seat, own));
-      }
-      if (request.strike().noise() != 0 || request.strike().seed() != 0) {
-        return absl::FailedPreconditionError(
-            "strike.noise, strike.seed: in a ruled game the table's noise applies, with a seed "
-            "no shooter chooses");
-      }
-      if (t.sim == nullptr) {
-        if (absl::Status s =
-                t.game_referee->CheckShot(t.rules, *t.model, t.game, seat, call, t.rest);
-            !s.ok()) {
-          return s;
-        }
-      }
-      struck.noise = t.noise;
-      struck.seed = DeriveSeed(t.seed, t.shots + 1);
-    } else if (request.has_call()) {
-      return absl::FailedPreconditionError("call: free play has no referee to call a shot to");
-    }
-    if (request.has_next_seat() && request.next_seat() >= t.seats.size()) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "next_seat must be in [0, %d], got %d", t.seats.size() - 1, request.next_seat()));
-    }
-    if (t.sim != nullptr) {
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "balls are still moving (shot %d): shoot when every ball is at rest",
-          t.current.shot_id));
-    }
-    const std::string id = Ruled(t)                         ? StrikerBall(t, seat)
-                           : request.strike().ball().empty() ? "cue"
-                                                             : request.strike().ball();
-    const int cue = t.rest.Find(id);
-    if (cue < 0) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("strike.ball: no ball %s on the table", Quote(id)));
-    }
-    if (t.rest.balls[cue].state == b::MotionState::kPocketed) {
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "strike.ball: ball %s is pocketed; put it back with PlaceBall first", Quote(id)));
-    }
-    b::TableState state = t.rest;
-    state.t_s = 0.0;
-    absl::StatusOr<b::StrikeOutcome> outcome =
-        b::ApplyStrike(*t.model, t.solver.effects, struck, cue, &state);
-    if (!outcome.ok()) return PrefixStatus("strike.", outcome.status());
-    std::vector<b::Event> events;
-    absl::StatusOr<std::unique_ptr<b::TableSimulation>> sim =
-        b::TableSimulation::Create(*t.model, t.solver, std::move(state), &events);
-    if (!sim.ok()) return sim.status();
+      [&](const std::shared_ptr<Table>& ptr, int seat, Table::Pump& pump) {
+        return ShootOn(*ptr, seat, request, pump);
+      });
+}
 
-    // Accepted: from here on nothing fails.
-    const SteadyClock::time_point now = SteadyClock::now();
-    const int64_t start = t.ClockTick(now) + 1;
-    t.tick = start;
-    ++t.sequence;
-    ++t.shots;
-    const uint64_t shot_id = t.shots;
-    t.current = ShotSummary{.shot_id = shot_id, .seat = static_cast<uint32_t>(seat),
-                            .struck_ball = id, .start_tick = start, .call = call};
-    if (Ruled(t)) {
-      t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShoot, .tick = start,
-                                    .seat = seat, .strike = request.strike().SerializeAsString(),
-                                    .call = call, .shot_id = shot_id, .seed = struck.seed,
-                                    .applied = *outcome});
-      t.clock_deadline.reset();
-      t.shot_events.clear();
-      RefreshGameView(t);
+absl::StatusOr<v1::ShootResponse> TableRegistry::ShootOn(Table& t, int seat,
+                                                   const v1::ShootRequest& request,
+                                                   Table::Pump& pump) {
+  const int asked = seat;
+  if (!request.has_strike()) return absl::InvalidArgumentError("strike: required");
+  absl::StatusOr<b::CueStrike> strike = StrikeFromProto(request.strike());
+  if (!strike.ok()) return strike.status();
+  absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/!Ruled(t));
+  if (!acting.ok()) return acting.status();
+  seat = *acting;
+  v1::ShootResponse response;
+  b::CueStrike struck = *strike;
+  absl::StatusOr<games::ShotCall> parsed = ShotCallFromProto(request.call());
+  if (!parsed.ok()) return parsed.status();
+  const games::ShotCall call = *std::move(parsed);
+  if (Ruled(t)) {
+    if (request.has_next_seat()) {
+      return absl::FailedPreconditionError(
+          "next_seat: in a ruled game the referee decides who plays next");
     }
-    t.sim = *std::move(sim);
-    t.referee = std::make_unique<b::ShotReferee>(cue);
-    t.shot_start = t.rest;
-    host_.RunStarted();
-    std::vector<EventPtr> fresh;
-    v1::TableEvent e = TableEvent(v1::shot, t.WorldTime(start), shot_id);
-    e.set_seat(static_cast<uint32_t>(seat));
-    e.add_balls(id);
-    fresh.push_back(t.Log(std::move(e)));
-    LogShotEvents(t, events, &fresh);
-    if (request.has_next_seat() && request.next_seat() != t.turn) {
-      t.turn = request.next_seat();
-      v1::TableEvent te = TableEvent(v1::turn, t.WorldTime(start), shot_id);
-      te.set_seat(t.turn);
-      fresh.push_back(t.Log(std::move(te)));
+    const std::string own = StrikerBall(t, seat);
+    if (!request.strike().ball().empty() && request.strike().ball() != own) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "strike.ball: seat %d strikes only its own cue ball \"%s\"", seat, own));
     }
-    host_.CountEvents(fresh.size());
-    const std::shared_ptr<const Frame> frame = t.MakeFrame(start, false);
-    t.OfferAll(frame, fresh, &pump);
-    response.set_shot_id(shot_id);
-    response.set_start_tick(start);
-    StrikeReportToProto(*outcome, response.mutable_strike());
-    host_.ScheduleNextTick(t);
-    return response;
-  });
+    if (request.strike().noise() != 0 || request.strike().seed() != 0) {
+      return absl::FailedPreconditionError(
+          "strike.noise, strike.seed: in a ruled game the table's noise applies, with a seed "
+          "no shooter chooses");
+    }
+    if (t.sim == nullptr) {
+      if (absl::Status s =
+              t.game_referee->CheckShot(t.rules, *t.model, t.game, seat, call, t.rest);
+          !s.ok()) {
+        return s;
+      }
+    }
+    struck.noise = t.noise;
+    struck.seed = DeriveSeed(t.seed, t.shots + 1);
+  } else if (request.has_call()) {
+    return absl::FailedPreconditionError("call: free play has no referee to call a shot to");
+  }
+  if (request.has_next_seat() && request.next_seat() >= t.seats.size()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "next_seat must be in [0, %d], got %d", t.seats.size() - 1, request.next_seat()));
+  }
+  if (t.sim != nullptr) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "balls are still moving (shot %d): shoot when every ball is at rest",
+        t.current.shot_id));
+  }
+  const std::string id = Ruled(t)                         ? StrikerBall(t, seat)
+                         : request.strike().ball().empty() ? "cue"
+                                                           : request.strike().ball();
+  const int cue = t.rest.Find(id);
+  if (cue < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("strike.ball: no ball %s on the table", Quote(id)));
+  }
+  if (t.rest.balls[cue].state == b::MotionState::kPocketed) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "strike.ball: ball %s is pocketed; put it back with PlaceBall first", Quote(id)));
+  }
+  b::TableState state = t.rest;
+  state.t_s = 0.0;
+  absl::StatusOr<b::StrikeOutcome> outcome =
+      b::ApplyStrike(*t.model, t.solver.effects, struck, cue, &state);
+  if (!outcome.ok()) return PrefixStatus("strike.", outcome.status());
+  std::vector<b::Event> events;
+  absl::StatusOr<std::unique_ptr<b::TableSimulation>> sim =
+      b::TableSimulation::Create(*t.model, t.solver, std::move(state), &events);
+  if (!sim.ok()) return sim.status();
+
+  // Accepted: from here on nothing fails.
+  if (absl::Status s = host_.Commit(t, asked, static_cast<uint32_t>(TableCommand::kShoot),
+                                    JournalBody(request));
+      !s.ok()) {
+    return s;
+  }
+  const SteadyClock::time_point now = SteadyClock::now();
+  const int64_t start = t.ClockTick(now) + 1;
+  t.tick = start;
+  ++t.sequence;
+  ++t.shots;
+  const uint64_t shot_id = t.shots;
+  t.current = ShotSummary{.shot_id = shot_id, .seat = static_cast<uint32_t>(seat),
+                          .struck_ball = id, .start_tick = start, .call = call};
+  if (Ruled(t)) {
+    t.record.push_back(MatchEntry{.kind = MatchEntry::Kind::kShoot, .tick = start,
+                                  .seat = seat, .strike = request.strike().SerializeAsString(),
+                                  .call = call, .shot_id = shot_id, .seed = struck.seed,
+                                  .applied = *outcome});
+    t.clock_deadline.reset();
+    t.shot_events.clear();
+    RefreshGameView(t);
+  }
+  t.sim = *std::move(sim);
+  t.referee = std::make_unique<b::ShotReferee>(cue);
+  t.shot_start = t.rest;
+  host_.RunStarted();
+  std::vector<EventPtr> fresh;
+  v1::TableEvent e = TableEvent(v1::shot, t.WorldTime(start), shot_id);
+  e.set_seat(static_cast<uint32_t>(seat));
+  e.add_balls(id);
+  fresh.push_back(t.Log(std::move(e)));
+  LogShotEvents(t, events, &fresh);
+  if (request.has_next_seat() && request.next_seat() != t.turn) {
+    t.turn = request.next_seat();
+    v1::TableEvent te = TableEvent(v1::turn, t.WorldTime(start), shot_id);
+    te.set_seat(t.turn);
+    fresh.push_back(t.Log(std::move(te)));
+  }
+  host_.CountEvents(fresh.size());
+  const std::shared_ptr<const Frame> frame = t.MakeFrame(start, false);
+  t.OfferAll(frame, fresh, &pump);
+  response.set_shot_id(shot_id);
+  response.set_start_tick(start);
+  StrikeReportToProto(*outcome, response.mutable_strike());
+  host_.ScheduleNextTick(t);
+  return response;
 }
 
 absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurn(const v1::SetTurnRequest& request) {
   // Only the seat to play passes the turn.
   return host_.Act<v1::SetTurnResponse>(
       request.table_id(), request.token(),
-      [&](const std::shared_ptr<Table>& ptr, int seat,
-          Table::Pump& pump) -> absl::StatusOr<v1::SetTurnResponse> {
-    Table& t = *ptr;
-    if (Ruled(t)) {
-      return absl::FailedPreconditionError(
-          "turn: in a ruled game the referee decides who plays next; nobody sets the turn");
+      [&](const std::shared_ptr<Table>& ptr, int seat, Table::Pump& pump) {
+        return SetTurnOn(*ptr, seat, request, pump);
+      });
+}
+
+absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurnOn(Table& t, int seat,
+                                                   const v1::SetTurnRequest& request,
+                                                   Table::Pump& pump) {
+  const int asked = seat;
+  if (Ruled(t)) {
+    return absl::FailedPreconditionError(
+        "turn: in a ruled game the referee decides who plays next; nobody sets the turn");
+  }
+  if (absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/true); !acting.ok()) {
+    return acting.status();
+  }
+  v1::SetTurnResponse response;
+  if (request.seat() >= t.seats.size()) {
+    return absl::InvalidArgumentError(absl::StrFormat("seat must be in [0, %d], got %d",
+                                                      t.seats.size() - 1, request.seat()));
+  }
+  if (request.seat() != t.turn) {
+    if (absl::Status s = host_.Commit(t, asked, static_cast<uint32_t>(TableCommand::kSetTurn),
+                                      JournalBody(request));
+        !s.ok()) {
+      return s;
     }
-    if (absl::StatusOr<int> acting = ActingSeat(t, seat, /*to_play=*/true); !acting.ok()) {
-      return acting.status();
-    }
-    v1::SetTurnResponse response;
-    if (request.seat() >= t.seats.size()) {
-      return absl::InvalidArgumentError(absl::StrFormat("seat must be in [0, %d], got %d",
-                                                        t.seats.size() - 1, request.seat()));
-    }
-    if (request.seat() != t.turn) {
-      const int64_t tick = t.NowTick();
-      ++t.sequence;
-      t.turn = request.seat();
-      v1::TableEvent e = TableEvent(v1::turn, t.WorldTime(tick), t.current.shot_id);
-      e.set_seat(t.turn);
-      std::vector<EventPtr> fresh{t.Log(std::move(e))};
-      host_.CountEvents(1);
-      // At rest the turn goes out now; while balls move it rides with the next snapshot.
-      const std::shared_ptr<const Frame> frame =
-          t.sim == nullptr ? t.MakeFrame(tick, false) : nullptr;
-      t.OfferAll(frame, fresh, &pump);
-    }
-    response.set_sequence(t.sequence);
-    return response;
-  });
+    const int64_t tick = t.NowTick();
+    ++t.sequence;
+    t.turn = request.seat();
+    v1::TableEvent e = TableEvent(v1::turn, t.WorldTime(tick), t.current.shot_id);
+    e.set_seat(t.turn);
+    std::vector<EventPtr> fresh{t.Log(std::move(e))};
+    host_.CountEvents(1);
+    // At rest the turn goes out now; while balls move it rides with the next snapshot.
+    const std::shared_ptr<const Frame> frame =
+        t.sim == nullptr ? t.MakeFrame(tick, false) : nullptr;
+    t.OfferAll(frame, fresh, &pump);
+  }
+  response.set_sequence(t.sequence);
+  return response;
 }
 
 absl::StatusOr<v1::DecideResponse> TableRegistry::Decide(const v1::DecideRequest& request) {
@@ -835,73 +949,93 @@ absl::StatusOr<v1::DecideResponse> TableRegistry::Decide(const v1::DecideRequest
   }
   return host_.Act<v1::DecideResponse>(
       request.table_id(), request.token(),
-      [&](const std::shared_ptr<Table>& ptr, int seat,
-          Table::Pump& pump) -> absl::StatusOr<v1::DecideResponse> {
-    Table& t = *ptr;
-    if (!Ruled(t)) {
-      return absl::FailedPreconditionError("decide: free play has no decisions");
-    }
-    if (seat == kAdminSeat) {
-      return absl::PermissionDeniedError("token: a decision is the seat's, not the admin's");
-    }
-    if (t.sim != nullptr) {
-      return absl::FailedPreconditionError("balls are still moving: decide when they are at rest");
-    }
-    b::TableState balls = t.rest;
-    absl::StatusOr<games::Judgement> j =
-        t.game_referee->Decide(t.rules, *t.model, t.game, seat, request.choice(), &balls);
-    if (!j.ok()) return j.status();
-    ApplyCallJudgement(host_, t, *std::move(j), std::move(balls),
-                       MatchEntry{.kind = MatchEntry::Kind::kDecide, .seat = seat,
-                                  .choice = request.choice()},
-                       &pump);
-    v1::DecideResponse response;
-    response.set_sequence(t.sequence);
-    *response.mutable_game() = *t.game_view;
-    return response;
-  });
+      [&](const std::shared_ptr<Table>& ptr, int seat, Table::Pump& pump) {
+        return DecideOn(*ptr, seat, request, pump);
+      });
+}
+
+absl::StatusOr<v1::DecideResponse> TableRegistry::DecideOn(Table& t, int seat,
+                                                   const v1::DecideRequest& request,
+                                                   Table::Pump& pump) {
+  const int asked = seat;
+  if (!Ruled(t)) {
+    return absl::FailedPreconditionError("decide: free play has no decisions");
+  }
+  if (seat == kAdminSeat) {
+    return absl::PermissionDeniedError("token: a decision is the seat's, not the admin's");
+  }
+  if (t.sim != nullptr) {
+    return absl::FailedPreconditionError("balls are still moving: decide when they are at rest");
+  }
+  b::TableState balls = t.rest;
+  absl::StatusOr<games::Judgement> j =
+      t.game_referee->Decide(t.rules, *t.model, t.game, seat, request.choice(), &balls);
+  if (!j.ok()) return j.status();
+  if (absl::Status s = host_.Commit(t, asked, static_cast<uint32_t>(TableCommand::kDecide),
+                                    JournalBody(request));
+      !s.ok()) {
+    return s;
+  }
+  ApplyCallJudgement(host_, t, *std::move(j), std::move(balls),
+                     MatchEntry{.kind = MatchEntry::Kind::kDecide, .seat = seat,
+                                .choice = request.choice()},
+                     &pump);
+  v1::DecideResponse response;
+  response.set_sequence(t.sequence);
+  *response.mutable_game() = *t.game_view;
+  return response;
 }
 
 absl::StatusOr<v1::ConcedeResponse> TableRegistry::Concede(const v1::ConcedeRequest& request) {
   return host_.Act<v1::ConcedeResponse>(
       request.table_id(), request.token(),
-      [&](const std::shared_ptr<Table>& ptr, int seat,
-          Table::Pump& pump) -> absl::StatusOr<v1::ConcedeResponse> {
-    Table& t = *ptr;
-    if (!Ruled(t)) {
-      return absl::FailedPreconditionError("concede: free play has no frames to concede");
+      [&](const std::shared_ptr<Table>& ptr, int seat, Table::Pump& pump) {
+        return ConcedeOn(*ptr, seat, request, pump);
+      });
+}
+
+absl::StatusOr<v1::ConcedeResponse> TableRegistry::ConcedeOn(Table& t, int seat,
+                                                   const v1::ConcedeRequest& request,
+                                                   Table::Pump& pump) {
+  const int asked = seat;
+  if (!Ruled(t)) {
+    return absl::FailedPreconditionError("concede: free play has no frames to concede");
+  }
+  int conceding = seat;
+  if (seat == kAdminSeat) {
+    if (!request.has_seat() || request.seat() > 1) {
+      return absl::InvalidArgumentError(
+          "seat: the admin token concedes for a seat, 0 or 1, which it must name");
     }
-    int conceding = seat;
-    if (seat == kAdminSeat) {
-      if (!request.has_seat() || request.seat() > 1) {
-        return absl::InvalidArgumentError(
-            "seat: the admin token concedes for a seat, 0 or 1, which it must name");
-      }
-      conceding = static_cast<int>(request.seat());
-    } else if (request.has_seat() && static_cast<int>(request.seat()) != seat) {
-      return absl::PermissionDeniedError("seat: a seat concedes only for itself");
-    }
-    if (t.sim != nullptr) {
-      return absl::FailedPreconditionError(
-          "balls are still moving: concede when they are at rest");
-    }
-    if (t.game.match_over()) {
-      return absl::FailedPreconditionError("the match is over: nothing left to concede");
-    }
-    b::TableState balls = t.rest;
-    absl::StatusOr<games::Judgement> j =
-        t.game_referee->Concede(t.rules, *t.model, t.game, conceding, &balls);
-    if (!j.ok()) return j.status();
-    const games::Verdict verdict = j->verdict;
-    ApplyCallJudgement(host_, t, *std::move(j), std::move(balls),
-                       MatchEntry{.kind = MatchEntry::Kind::kConcede, .seat = conceding,
-                                  .verdict = verdict},
-                       &pump);
-    v1::ConcedeResponse response;
-    response.set_sequence(t.sequence);
-    *response.mutable_game() = *t.game_view;
-    return response;
-  });
+    conceding = static_cast<int>(request.seat());
+  } else if (request.has_seat() && static_cast<int>(request.seat()) != seat) {
+    return absl::PermissionDeniedError("seat: a seat concedes only for itself");
+  }
+  if (t.sim != nullptr) {
+    return absl::FailedPreconditionError(
+        "balls are still moving: concede when they are at rest");
+  }
+  if (t.game.match_over()) {
+    return absl::FailedPreconditionError("the match is over: nothing left to concede");
+  }
+  b::TableState balls = t.rest;
+  absl::StatusOr<games::Judgement> j =
+      t.game_referee->Concede(t.rules, *t.model, t.game, conceding, &balls);
+  if (!j.ok()) return j.status();
+  if (absl::Status s = host_.Commit(t, asked, static_cast<uint32_t>(TableCommand::kConcede),
+                                    JournalBody(request));
+      !s.ok()) {
+    return s;
+  }
+  const games::Verdict verdict = j->verdict;
+  ApplyCallJudgement(host_, t, *std::move(j), std::move(balls),
+                     MatchEntry{.kind = MatchEntry::Kind::kConcede, .seat = conceding,
+                                .verdict = verdict},
+                     &pump);
+  v1::ConcedeResponse response;
+  response.set_sequence(t.sequence);
+  *response.mutable_game() = *t.game_view;
+  return response;
 }
 
 absl::StatusOr<v1::MatchRecord> TableRegistry::GetMatchRecord(
@@ -1040,5 +1174,52 @@ void TableRegistry::Unwatch(const std::string& table_id, const Watcher* watcher)
 }
 
 void TableRegistry::Shutdown(const absl::Status& status) { host_.Shutdown(status); }
+
+template <typename Req, typename Resp>
+absl::Status TableRegistry::ReplayAs(
+    absl::StatusOr<Resp> (TableRegistry::*on)(Table&, int, const Req&, Table::Pump&), Table& t,
+    const JournalEntry& e, Table::Pump& pump) {
+  Req request;
+  if (!request.ParseFromString(e.body)) {
+    return absl::DataLossError(absl::StrFormat("entry %d: the command does not parse", e.index));
+  }
+  return (this->*on)(t, e.seat, request, pump).status();
+}
+
+absl::Status TableRegistry::Replay(Table& t, const JournalEntry& e, Table::Pump& pump) {
+  switch (static_cast<TableCommand>(e.type)) {
+    case TableCommand::kReset: return ReplayAs(&TableRegistry::ResetOn, t, e, pump);
+    case TableCommand::kPlace: return ReplayAs(&TableRegistry::PlaceOn, t, e, pump);
+    case TableCommand::kShoot: return ReplayAs(&TableRegistry::ShootOn, t, e, pump);
+    case TableCommand::kSetTurn: return ReplayAs(&TableRegistry::SetTurnOn, t, e, pump);
+    case TableCommand::kDecide: return ReplayAs(&TableRegistry::DecideOn, t, e, pump);
+    case TableCommand::kConcede: return ReplayAs(&TableRegistry::ConcedeOn, t, e, pump);
+    case TableCommand::kCreate:
+    case TableCommand::kDelete:
+      break;
+  }
+  return absl::DataLossError(
+      absl::StrFormat("entry %d: no table command of type %d", e.index, e.type));
+}
+
+absl::Status TableRegistry::Restore(const StoredWorld& stored) {
+  return host_.Restore(
+      stored,
+      [&](Table& t, const std::string& kind_body) -> absl::Status {
+        ::sportsim::store::v1::TableCreated created;
+        v1::CreateTableRequest request;
+        if (!created.ParseFromString(kind_body) || !request.ParseFromString(created.request())) {
+          return absl::DataLossError("its creation does not parse");
+        }
+        std::vector<std::string> unused;
+        return MakeTable(request, created.seed(), t, &unused).status();
+      },
+      [&](Table& t, const std::string& checkpoint) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+        return LoadCheckpoint(t, checkpoint);
+      },
+      [&](Table& t, const JournalEntry& e, Table::Pump& pump) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+        return Replay(t, e, pump);
+      });
+}
 
 }  // namespace sportsim::server

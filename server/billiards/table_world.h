@@ -28,6 +28,7 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/billiards/preview.h"
+#include "server/world/journal.h"
 #include "server/world/scheduler.h"
 #include "server/world/watcher.h"
 #include "server/world/world_host.h"
@@ -193,6 +194,19 @@ struct TableKind {
                              std::vector<std::shared_ptr<const v1::TableEvent>>* fresh);
 };
 
+/// A table's commands in the journal (JournalEntry::type; the creation is 0). Stored: never
+/// renumber.
+enum class TableCommand : uint32_t {
+  kCreate = 0,
+  kReset = 1,
+  kPlace = 2,
+  kShoot = 3,
+  kSetTurn = 4,
+  kDecide = 5,
+  kConcede = 6,
+  kDelete = 7,
+};
+
 /// Every table of the server: the table-specific calls over a WorldHost<TableKind>.
 class TableRegistry {
  public:
@@ -200,6 +214,13 @@ class TableRegistry {
   ~TableRegistry();
   TableRegistry(const TableRegistry&) = delete;
   TableRegistry& operator=(const TableRegistry&) = delete;
+
+  /// Every accepted command goes to `journal` before it takes effect (null: none). Set before
+  /// the first call.
+  void SetJournal(Journal* journal) { host_.SetJournal(journal); }
+  /// Recreates a table from the journal (a restart, a takeover) under its own id, its clock
+  /// resuming at the tick it had reached.
+  absl::Status Restore(const StoredWorld& stored);
 
   absl::StatusOr<v1::CreateTableResponse> Create(const v1::CreateTableRequest& request);
   absl::StatusOr<v1::TableInfo> Get(const v1::GetTableRequest& request);
@@ -232,6 +253,38 @@ class TableRegistry {
   const LatencyHistogram& publish_to_write() const { return host_.publish_to_write(); }
 
  private:
+  /// A table as `request` makes it (checked), into `made`: everything but its id and admin
+  /// token. `seed`: the restored secret seed (none: the request's or a fresh one). Seats are
+  /// made unless `made` has them (a restore), their tokens going to `tokens`.
+  absl::StatusOr<v1::CreateTableResponse> MakeTable(const v1::CreateTableRequest& request,
+                                                    std::optional<uint64_t> seed, Table& made,
+                                                    std::vector<std::string>* tokens);
+  // The calls on a table under its lock, authorized as `seat`: what a call does, and what a
+  // restore replays.
+  absl::StatusOr<v1::ResetTableResponse> ResetOn(Table& t, int seat,
+                                                 const v1::ResetTableRequest& request,
+                                                 Table::Pump& pump);
+  absl::StatusOr<v1::PlaceBallResponse> PlaceOn(Table& t, int seat,
+                                                const v1::PlaceBallRequest& request,
+                                                Table::Pump& pump);
+  absl::StatusOr<v1::ShootResponse> ShootOn(Table& t, int seat, const v1::ShootRequest& request,
+                                            Table::Pump& pump);
+  absl::StatusOr<v1::SetTurnResponse> SetTurnOn(Table& t, int seat,
+                                                const v1::SetTurnRequest& request,
+                                                Table::Pump& pump);
+  absl::StatusOr<v1::DecideResponse> DecideOn(Table& t, int seat,
+                                              const v1::DecideRequest& request,
+                                              Table::Pump& pump);
+  absl::StatusOr<v1::ConcedeResponse> ConcedeOn(Table& t, int seat,
+                                                const v1::ConcedeRequest& request,
+                                                Table::Pump& pump);
+  /// Applies a journal entry (restore).
+  absl::Status Replay(Table& t, const JournalEntry& e, Table::Pump& pump);
+  template <typename Req, typename Resp>
+  absl::Status ReplayAs(absl::StatusOr<Resp> (TableRegistry::*on)(Table&, int, const Req&,
+                                                                  Table::Pump&),
+                        Table& t, const JournalEntry& e, Table::Pump& pump);
+
   const TableLimits limits_;
   TableHost host_;
 };

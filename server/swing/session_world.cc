@@ -9,6 +9,7 @@
 #include "server/world/event_log.h"
 #include "server/swing/convert.h"
 #include "server/world/watcher_impl.h"
+#include "sportsim/store/v1/journal.pb.h"
 #include "server/world/world.h"
 #include "sim/swing/live_swing.h"
 #include "sim/swing/realism.h"
@@ -247,12 +248,28 @@ SessionRegistry::~SessionRegistry() {
 
 absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::Create(
     const v1::CreateSessionRequest& request) {
+  const std::shared_ptr<Session> session = host_.Make();
+  std::vector<std::string> tokens;
+  absl::StatusOr<v1::CreateSessionResponse> made = MakeSession(request, *session, &tokens);
+  if (!made.ok()) return made.status();
+  v1::CreateSessionResponse response = *std::move(made);
+  SeatsToProto(session->seats, &tokens, response.mutable_seats());
+  ::sportsim::store::v1::SessionCreated created;
+  created.set_request(request.SerializeAsString());
+  if (absl::Status s = host_.Add(session, created.SerializeAsString()); !s.ok()) return s;
+  response.set_session_id(session->id);
+  response.set_token(tokens[0]);
+  return response;
+}
+
+absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::MakeSession(
+    const v1::CreateSessionRequest& request, Session& made, std::vector<std::string>* tokens) {
   const double tick_hz = request.tick_hz() == 0 ? kDefaultTickHz : request.tick_hz();
   if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 1000, false); !s.ok()) {
     return s;
   }
   absl::StatusOr<std::vector<SeatEntry>> seats =
-      MakeSeats(request.seats(), request.seat_names(), /*default_count=*/1);
+      MakeSeats(request.seats(), request.seat_names(), /*default_count=*/1, tokens);
   if (!seats.ok()) return seats.status();
   absl::StatusOr<sw::SwingModel> model =
       SwingModelFromProto(request.parameters(), request.disabled_effects());
@@ -282,7 +299,7 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::Create(
     strike = *std::move(job);
   }
 
-  const std::shared_ptr<Session> session = host_.Make();
+  Session* const session = &made;
   session->counters = &counters_;
   session->strike = std::move(strike);
   session->tick_hz = tick_hz;
@@ -290,9 +307,8 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::Create(
   session->disabled_effects = request.disabled_effects();
   session->solver = *solver;
   session->realistic = request.profile() != v1::REALISM_PROFILE_ARCADE;
-  session->seats = *std::move(seats);
+  if (session->seats.empty()) session->seats = *std::move(seats);  // a restore keeps its own
   v1::CreateSessionResponse response;
-  SeatsToProto(session->seats, /*with_tokens=*/true, response.mutable_seats());
   {
     absl::MutexLock lock(&session->mu);
     session->clock.tick_hz = tick_hz * host_.limits().clock_rate;
@@ -301,9 +317,6 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::Create(
     session->model = std::make_shared<const sw::SwingModel>(*model);
     session->state = sw::MakeSample(*model, 0.0, sw::SwingStepper::InitialState(*model));
   }
-  if (absl::Status s = host_.Add(session); !s.ok()) return s;
-  response.set_session_id(session->id);
-  response.set_token(session->seats[0].token);
   response.set_tick_hz(tick_hz);
   response.set_integrator(std::string(sw::SwingIntegratorName(solver->integrator)));
   response.set_tick(0);
@@ -326,7 +339,7 @@ absl::StatusOr<v1::SessionInfo> SessionRegistry::Get(const v1::GetSessionRequest
   info.set_swings(s.swings);
   SampleToProto(s.state, info.mutable_state());
   if (s.last_impact) ImpactToProto(*s.last_impact, info.mutable_last_impact());
-  SeatsToProto(s.seats, /*with_tokens=*/false, info.mutable_seats());
+  SeatsToProto(s.seats, nullptr, info.mutable_seats());
   info.set_watchers(static_cast<uint32_t>(s.watchers.size()));
   info.set_integrator(std::string(sw::SwingIntegratorName(s.solver.integrator)));
   if (s.solver.integrator != sw::SwingIntegrator::kDp45) {
@@ -372,7 +385,8 @@ absl::Status SessionRegistry::Delete(const v1::DeleteSessionRequest& request) {
           // The driver's stream is closed with the others.
           EndSwing(host_, s, sw::LiveSwingEnd{.reason = sw::SwingEnd::kDeleted}, fresh);
         }
-      });
+      },
+      static_cast<uint32_t>(SessionCommand::kDelete), JournalBody(request));
 }
 
 namespace {
@@ -474,73 +488,95 @@ absl::StatusOr<v1::StartSwingResponse> SessionRegistry::Start(const v1::StartSwi
       }
     }
   }
-  Session::Pump pump;
-  v1::StartSwingResponse response;
-  {
-    absl::MutexLock lock(&s.mu);
-    absl::StatusOr<int> seat = s.Authorize(request.token());
-    if (!seat.ok()) return seat.status();
-    if (s.live != nullptr || s.model != model) {
-      return absl::FailedPreconditionError(
-          "the session started another swing or was reset while this one was checked; try again");
-    }
-    const sw::LiveSwingOptions options{.stop = stop->first, .duration_s = stop->second,
-                                       .tick_hz = s.tick_hz, .realistic = s.realistic};
-    absl::StatusOr<std::unique_ptr<sw::LiveSwing>> live =
-        sw::LiveSwing::Create(*model, *std::move(program), s.solver, options);
-    if (!live.ok()) return live.status();  // the solver was validated at creation
-    std::vector<SwingEventPtr> fresh;
-    BeginSwing(host_, s, *std::move(live), static_cast<uint32_t>(*seat), &fresh);
-    s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
-    host_.ScheduleNextTick(s);
-    response.set_swing_id(s.swings);
-    response.set_start_tick(s.tick);
-    response.set_sequence(s.sequence);
+  return host_.Act<v1::StartSwingResponse>(
+      request.session_id(), request.token(),
+      [&](const std::shared_ptr<Session>& ptr, int seat, Session::Pump& pump) {
+        return StartOn(*ptr, seat, request, model.get(), pump);
+      });
+}
+
+absl::StatusOr<v1::StartSwingResponse> SessionRegistry::StartOn(
+    Session& s, int seat, const v1::StartSwingRequest& request, const sw::SwingModel* checked,
+    Session::Pump& pump) {
+  absl::StatusOr<sw::TorqueProgram> program =
+      TorqueProgramFromProto(request.torques(), request.has_torques());
+  if (!program.ok()) return program.status();
+  absl::StatusOr<std::pair<sw::SwingStop, double>> stop =
+      StopFromProto(request.stop(), request.has_duration_s(), request.duration_s(), "");
+  if (!stop.ok()) return stop.status();
+  if (s.live != nullptr || (checked != nullptr && s.model.get() != checked)) {
+    return absl::FailedPreconditionError(
+        "the session started another swing or was reset while this one was checked; try again");
   }
-  SessionHost::PumpAll(pump);
+  const sw::LiveSwingOptions options{.stop = stop->first, .duration_s = stop->second,
+                                     .tick_hz = s.tick_hz, .realistic = s.realistic};
+  absl::StatusOr<std::unique_ptr<sw::LiveSwing>> live =
+      sw::LiveSwing::Create(*s.model, *std::move(program), s.solver, options);
+  if (!live.ok()) return live.status();  // the solver was validated at creation
+  if (absl::Status st = host_.Commit(s, seat, static_cast<uint32_t>(SessionCommand::kStart),
+                                     JournalBody(request));
+      !st.ok()) {
+    return st;
+  }
+  v1::StartSwingResponse response;
+  std::vector<SwingEventPtr> fresh;
+  BeginSwing(host_, s, *std::move(live), static_cast<uint32_t>(seat), &fresh);
+  s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
+  host_.ScheduleNextTick(s);
+  response.set_swing_id(s.swings);
+  response.set_start_tick(s.tick);
+  response.set_sequence(s.sequence);
   return response;
 }
 
 absl::StatusOr<v1::ResetSwingResponse> SessionRegistry::Reset(const v1::ResetSwingRequest& request) {
   return host_.Act<v1::ResetSwingResponse>(
       request.session_id(), request.token(),
-      [&](const std::shared_ptr<Session>& ptr, int seat,
-          Session::Pump& pump) -> absl::StatusOr<v1::ResetSwingResponse> {
-    Session& s = *ptr;
-    v1::ResetSwingResponse response;
-    v1::SwingParameters params = s.params;
-    if (request.has_gamma_deg()) params.set_gamma_deg(request.gamma_deg());
-    if (request.has_beta0_deg()) params.set_beta0_deg(request.beta0_deg());
-    absl::StatusOr<sw::SwingModel> model = SwingModelFromProto(params, s.disabled_effects);
-    if (!model.ok()) return model.status();
-    const int64_t tick = s.NowTick();
-    s.tick = tick;
-    ++s.sequence;
-    std::vector<SwingEventPtr> fresh;
-    std::shared_ptr<SwingWatcher> driver;
-    if (s.live != nullptr) {
-      driver = EndSwing(host_, s, sw::LiveSwingEnd{.reason = sw::SwingEnd::kReset}, &fresh);
-      host_.AfterRunEndedByCall(s);
-    }
-    s.params = params;
-    s.model = std::make_shared<const sw::SwingModel>(*model);
-    s.phase = SessionPhase::kAddress;
-    s.state = sw::MakeSample(*model, 0.0, sw::SwingStepper::InitialState(*model));
-    s.qalpha = s.qbeta = 0.0;
-    v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_RESET, 0.0, s.swings, tick);
-    e.set_seat(static_cast<uint32_t>(seat));
-    fresh.push_back(s.Log(std::move(e)));
-    host_.CountEvents(fresh.size());
-    const auto frame = s.MakeFrame(tick, false);
-    s.OfferAll(frame, fresh, &pump);
-    if (driver != nullptr) {
-      s.Forget(driver.get());
-      if (driver->Close(absl::OkStatus(), nullptr)) pump.push_back(driver);
-    }
-    response.set_sequence(s.sequence);
-    response.set_tick(tick);
-    return response;
-  });
+      [&](const std::shared_ptr<Session>& ptr, int seat, Session::Pump& pump) {
+        return ResetOn(*ptr, seat, request, pump);
+      });
+}
+
+absl::StatusOr<v1::ResetSwingResponse> SessionRegistry::ResetOn(
+    Session& s, int seat, const v1::ResetSwingRequest& request, Session::Pump& pump) {
+  v1::ResetSwingResponse response;
+  v1::SwingParameters params = s.params;
+  if (request.has_gamma_deg()) params.set_gamma_deg(request.gamma_deg());
+  if (request.has_beta0_deg()) params.set_beta0_deg(request.beta0_deg());
+  absl::StatusOr<sw::SwingModel> model = SwingModelFromProto(params, s.disabled_effects);
+  if (!model.ok()) return model.status();
+  if (absl::Status st = host_.Commit(s, seat, static_cast<uint32_t>(SessionCommand::kReset),
+                                     JournalBody(request));
+      !st.ok()) {
+    return st;
+  }
+  const int64_t tick = s.NowTick();
+  s.tick = tick;
+  ++s.sequence;
+  std::vector<SwingEventPtr> fresh;
+  std::shared_ptr<SwingWatcher> driver;
+  if (s.live != nullptr) {
+    driver = EndSwing(host_, s, sw::LiveSwingEnd{.reason = sw::SwingEnd::kReset}, &fresh);
+    host_.AfterRunEndedByCall(s);
+  }
+  s.params = params;
+  s.model = std::make_shared<const sw::SwingModel>(*model);
+  s.phase = SessionPhase::kAddress;
+  s.state = sw::MakeSample(*model, 0.0, sw::SwingStepper::InitialState(*model));
+  s.qalpha = s.qbeta = 0.0;
+  v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_RESET, 0.0, s.swings, tick);
+  e.set_seat(static_cast<uint32_t>(seat));
+  fresh.push_back(s.Log(std::move(e)));
+  host_.CountEvents(fresh.size());
+  const auto frame = s.MakeFrame(tick, false);
+  s.OfferAll(frame, fresh, &pump);
+  if (driver != nullptr) {
+    s.Forget(driver.get());
+    if (driver->Close(absl::OkStatus(), nullptr)) pump.push_back(driver);
+  }
+  response.set_sequence(s.sequence);
+  response.set_tick(tick);
+  return response;
 }
 
 absl::StatusOr<std::shared_ptr<SwingWatcher>> SessionRegistry::Watch(
@@ -590,29 +626,12 @@ absl::StatusOr<std::shared_ptr<Drive>> SessionRegistry::StartDrive(const v1::Dri
   drive->apply_late = start.apply_late();
   {
     absl::MutexLock lock(&s.mu);
+    SessionHost::AwaitCommitted(s);
     absl::StatusOr<int> seat = s.Authorize(start.token());
     if (!seat.ok()) return PrefixStatus("start.", seat.status());
-    if (s.live != nullptr) {
-      return absl::FailedPreconditionError(absl::StrFormat(
-          "a swing is in progress (swing %d); wait for its end or ResetSwing", s.swings));
-    }
-    if (absl::Status room = host_.CheckWatcherRoom(s); !room.ok()) return room;
-    const sw::LiveSwingOptions options{.stop = stop->first, .duration_s = stop->second,
-                                       .tick_hz = s.tick_hz, .driven = true,
-                                       .realistic = s.realistic};
-    absl::StatusOr<std::unique_ptr<sw::LiveSwing>> live = sw::LiveSwing::Create(
-        *s.model, sw::TorqueProgram::Constant(start.qalpha_nm(), start.qbeta_nm()), s.solver,
-        options, start.qalpha_nm(), start.qbeta_nm());
-    if (!live.ok()) return live.status();  // the solver was validated at creation
-    s.watchers.push_back(watcher);
-    std::vector<SwingEventPtr> fresh;
-    BeginSwing(host_, s, *std::move(live), static_cast<uint32_t>(*seat), &fresh);
-    s.driver = watcher;
-    watcher->Due(s.tick);
-    s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
-    host_.ScheduleNextTick(s);
-    drive->swing_id = s.swings;
-    drive->seat = *seat;
+    absl::Status started = DriveStartOn(s, *seat, start, *drive, pump);
+    host_.AfterCall(s);
+    if (!started.ok()) return started;
   }
   // The others are pumped here, with no lock held; the caller pumps its own stream once it is
   // ready.
@@ -620,6 +639,42 @@ absl::StatusOr<std::shared_ptr<Drive>> SessionRegistry::StartDrive(const v1::Dri
     if (w != watcher) w->Pump();
   }
   return drive;
+}
+
+absl::Status SessionRegistry::DriveStartOn(Session& s, int seat, const v1::DriveStart& start,
+                                           Drive& drive, Session::Pump& pump) {
+  absl::StatusOr<std::pair<sw::SwingStop, double>> stop =
+      StopFromProto(start.stop(), start.has_duration_s(), start.duration_s(), "start.");
+  if (!stop.ok()) return stop.status();
+  if (s.live != nullptr) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "a swing is in progress (swing %d); wait for its end or ResetSwing", s.swings));
+  }
+  if (absl::Status room = host_.CheckWatcherRoom(s); !room.ok()) return room;
+  const sw::LiveSwingOptions options{.stop = stop->first, .duration_s = stop->second,
+                                     .tick_hz = s.tick_hz, .driven = true,
+                                     .realistic = s.realistic};
+  absl::StatusOr<std::unique_ptr<sw::LiveSwing>> live = sw::LiveSwing::Create(
+      *s.model, sw::TorqueProgram::Constant(start.qalpha_nm(), start.qbeta_nm()), s.solver,
+      options, start.qalpha_nm(), start.qbeta_nm());
+  if (!live.ok()) return live.status();  // the solver was validated at creation
+  if (absl::Status st = host_.Commit(s, seat, static_cast<uint32_t>(SessionCommand::kDriveStart),
+                                     JournalBody(start));
+      !st.ok()) {
+    return st;
+  }
+  const std::shared_ptr<SwingWatcher>& watcher = drive.watcher;
+  s.watchers.push_back(watcher);
+  std::vector<SwingEventPtr> fresh;
+  BeginSwing(host_, s, *std::move(live), static_cast<uint32_t>(seat), &fresh);
+  s.driver = watcher;
+  watcher->Due(s.tick);
+  s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
+  host_.ScheduleNextTick(s);
+  drive.swing_id = s.swings;
+  drive.seat = seat;
+  drive.apply_late = start.apply_late();
+  return absl::OkStatus();
 }
 
 void SessionRegistry::Refuse(Drive& drive, const absl::Status& why,
@@ -651,6 +706,17 @@ void SessionRegistry::Command(Drive& drive, const v1::TorqueCommand& c) {
   absl::Status refused;
   {
     absl::MutexLock lock(&s.mu);
+    SessionHost::AwaitCommitted(s);
+    refused = CommandOn(s, drive, c);
+    host_.AfterCall(s);
+  }
+  // Refused: reported on the driver's stream; nothing else changes.
+  if (!refused.ok()) Refuse(drive, refused, &c);
+}
+
+absl::Status SessionRegistry::CommandOn(Session& s, Drive& drive, const v1::TorqueCommand& c) {
+  absl::Status refused;
+  {
     sw::LiveSwing* r = s.live.get();
     const uint64_t index = drive.commands + 1;
     const auto refuse = [&](absl::Status st) {
@@ -719,18 +785,24 @@ void SessionRegistry::Command(Drive& drive, const v1::TorqueCommand& c) {
         late = true;
       }
       if (refused.ok()) {
+        ::sportsim::store::v1::DriveCommand body;
+        body.set_command(c.SerializeAsString());
+        body.set_index(index);
+        refused = host_.Commit(s, drive.seat, static_cast<uint32_t>(SessionCommand::kDriveCommand),
+                               body.SerializeAsString());
+      }
+      if (refused.ok()) {
         ++drive.commands;
         drive.last_t_s = c.t_s();
         r->pending().push_back(sw::QueuedTorque{.n = n, .t_s = c.t_s(),
                                                 .qalpha_nm = c.qalpha_nm(),
                                                 .qbeta_nm = c.qbeta_nm(),
                                                 .index = drive.commands, .late = late});
-        return;
+        return absl::OkStatus();
       }
     }
   }
-  // Refused: reported on the driver's stream; nothing else changes.
-  Refuse(drive, refused, &c);
+  return refused;
 }
 
 void SessionRegistry::EndDrive(Drive& drive, bool half_closed) {
@@ -738,13 +810,19 @@ void SessionRegistry::EndDrive(Drive& drive, bool half_closed) {
   bool pump = false;
   {
     absl::MutexLock lock(&s.mu);
+    SessionHost::AwaitCommitted(s);
     if (drive.ended) return;
     drive.ended = true;
     if (s.live != nullptr && s.driver == drive.watcher) {
-      s.driver = nullptr;
-      // Half-closed: "no more commands", the queued ones stand. Gone: the controller that
-      // sent them is gone too; the torques in force hold.
-      if (!half_closed) s.live->pending().clear();
+      ::sportsim::store::v1::DriveEnded body;
+      body.set_half_closed(half_closed);
+      // Not durable (the store is down): the queued commands stand, as if half-closed.
+      const bool durable =
+          host_.Commit(s, drive.seat, static_cast<uint32_t>(SessionCommand::kDriveEnd),
+                       body.SerializeAsString())
+              .ok();
+      DriveEndOn(s, half_closed || !durable);
+      host_.AfterCall(s);
     }
     s.Forget(drive.watcher.get());
     if (half_closed) {
@@ -752,6 +830,91 @@ void SessionRegistry::EndDrive(Drive& drive, bool half_closed) {
     }
   }
   if (pump) drive.watcher->Pump();
+}
+
+void SessionRegistry::DriveEndOn(Session& s, bool half_closed) {
+  s.driver = nullptr;
+  // Half-closed: "no more commands", the queued ones stand. Gone: the controller that sent
+  // them is gone too; the torques in force hold.
+  if (!half_closed) s.live->pending().clear();
+}
+
+absl::Status SessionRegistry::Restore(const StoredWorld& stored) {
+  std::shared_ptr<Drive> drive;  // the driven swing being replayed, if any
+  absl::Status restored = host_.Restore(
+      stored,
+      [&](Session& s, const std::string& kind_body) -> absl::Status {
+        ::sportsim::store::v1::SessionCreated created;
+        v1::CreateSessionRequest request;
+        if (!created.ParseFromString(kind_body) || !request.ParseFromString(created.request())) {
+          return absl::DataLossError("its creation does not parse");
+        }
+        std::vector<std::string> unused;
+        return MakeSession(request, s, &unused).status();
+      },
+      [&](Session&, const std::string&) -> absl::Status {
+        return absl::DataLossError("a session has no checkpoints");
+      },
+      [&](Session& s, const JournalEntry& e, Session::Pump& pump)
+          ABSL_NO_THREAD_SAFETY_ANALYSIS -> absl::Status {
+        const auto bad = [&] {
+          return absl::DataLossError(
+              absl::StrFormat("entry %d: the command does not parse", e.index));
+        };
+        switch (static_cast<SessionCommand>(e.type)) {
+          case SessionCommand::kStart: {
+            v1::StartSwingRequest r;
+            if (!r.ParseFromString(e.body)) return bad();
+            return StartOn(s, e.seat, r, nullptr, pump).status();
+          }
+          case SessionCommand::kReset: {
+            v1::ResetSwingRequest r;
+            if (!r.ParseFromString(e.body)) return bad();
+            return ResetOn(s, e.seat, r, pump).status();
+          }
+          case SessionCommand::kDriveStart: {
+            v1::DriveStart r;
+            if (!r.ParseFromString(e.body)) return bad();
+            drive = std::make_shared<Drive>();
+            drive->session = std::static_pointer_cast<Session>(s.shared_from_this());
+            // The driver's stream did not survive its server: a stand-in nobody reads.
+            drive->watcher = host_.NewWatcher(s, SwingWatchOptions{}, 1.0, nullptr);
+            return DriveStartOn(s, e.seat, r, *drive, pump);
+          }
+          case SessionCommand::kDriveCommand: {
+            ::sportsim::store::v1::DriveCommand body;
+            v1::TorqueCommand c;
+            if (!body.ParseFromString(e.body) || !c.ParseFromString(body.command())) return bad();
+            if (drive == nullptr || body.index() == 0) return bad();
+            drive->commands = body.index() - 1;  // refused commands count too
+            return CommandOn(s, *drive, c);
+          }
+          case SessionCommand::kDriveEnd: {
+            ::sportsim::store::v1::DriveEnded body;
+            if (!body.ParseFromString(e.body)) return bad();
+            if (s.live != nullptr && drive != nullptr && s.driver == drive->watcher) {
+              DriveEndOn(s, body.half_closed());
+            }
+            if (drive != nullptr) s.Forget(drive->watcher.get());
+            drive = nullptr;
+            return absl::OkStatus();
+          }
+          case SessionCommand::kCreate:
+          case SessionCommand::kDelete:
+            break;
+        }
+        return absl::DataLossError(
+            absl::StrFormat("entry %d: no session command of type %d", e.index, e.type));
+      });
+  if (drive != nullptr) {
+    // A driven swing in flight goes on with the commands it accepted, as if its driver had
+    // half-closed: no stream drives it after a restore.
+    Session& s = *drive->session;
+    absl::MutexLock lock(&s.mu);
+    if (s.live != nullptr && s.driver == drive->watcher) s.driver = nullptr;
+    s.Forget(drive->watcher.get());
+  }
+  return restored;
 }
 
 void SessionRegistry::Shutdown(const absl::Status& status) {

@@ -28,6 +28,7 @@
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
+#include "server/world/journal.h"
 #include "server/world/scheduler.h"
 #include "server/swing/convert.h"
 #include "server/world/watcher.h"
@@ -162,6 +163,18 @@ struct Drive {
   bool ended = false;
 };
 
+/// A session's commands in the journal (JournalEntry::type; the creation is 0). Stored: never
+/// renumber.
+enum class SessionCommand : uint32_t {
+  kCreate = 0,
+  kStart = 1,
+  kReset = 2,
+  kDriveStart = 3,
+  kDriveCommand = 4,
+  kDriveEnd = 5,
+  kDelete = 6,
+};
+
 /// Every swing session of the server: the session calls over a WorldHost<SessionKind>.
 class SessionRegistry {
  public:
@@ -171,6 +184,13 @@ class SessionRegistry {
   ~SessionRegistry();
   SessionRegistry(const SessionRegistry&) = delete;
   SessionRegistry& operator=(const SessionRegistry&) = delete;
+
+  /// Every accepted command goes to `journal` before it takes effect (null: none). Set before
+  /// the first call.
+  void SetJournal(Journal* journal) { host_.SetJournal(journal); }
+  /// Recreates a session from the journal under its own id; a swing in flight goes on (a
+  /// driven one with the commands it accepted, its driver's stream gone).
+  absl::Status Restore(const StoredWorld& stored);
 
   absl::StatusOr<v1::CreateSessionResponse> Create(const v1::CreateSessionRequest& request);
   absl::StatusOr<v1::SessionInfo> Get(const v1::GetSessionRequest& request);
@@ -207,6 +227,26 @@ class SessionRegistry {
   const LatencyHistogram& publish_to_write() const { return host_.publish_to_write(); }
 
  private:
+  /// A session as `request` makes it (checked), into `made`: everything but its id. Seats are
+  /// made unless `made` has them (a restore), their tokens going to `tokens`.
+  absl::StatusOr<v1::CreateSessionResponse> MakeSession(const v1::CreateSessionRequest& request,
+                                                        Session& made,
+                                                        std::vector<std::string>* tokens);
+  // The calls on a session under its lock, as `seat`: what a call does, and what a restore
+  // replays. `checked`: the model StartSwing's dry run used (null: no dry run, a replay).
+  absl::StatusOr<v1::StartSwingResponse> StartOn(Session& s, int seat,
+                                                 const v1::StartSwingRequest& request,
+                                                 const swing::SwingModel* checked,
+                                                 Session::Pump& pump);
+  absl::StatusOr<v1::ResetSwingResponse> ResetOn(Session& s, int seat,
+                                                 const v1::ResetSwingRequest& request,
+                                                 Session::Pump& pump);
+  absl::Status DriveStartOn(Session& s, int seat, const v1::DriveStart& start, Drive& drive,
+                            Session::Pump& pump);
+  /// OK when queued; else why it was refused (nothing changed).
+  absl::Status CommandOn(Session& s, Drive& drive, const v1::TorqueCommand& c);
+  void DriveEndOn(Session& s, bool half_closed);
+
   const SessionLimits limits_;
   CommandCounters counters_;
   SessionHost host_;

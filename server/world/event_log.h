@@ -3,6 +3,7 @@
 #ifndef SPORTSIM_SERVER_EVENT_LOG_H_
 #define SPORTSIM_SERVER_EVENT_LOG_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -49,6 +50,10 @@ class EventLog {
     }
     return out;
   }
+
+  /// Events up to `sequence` are not held (a world restored from a checkpoint): a reader that
+  /// resumes from before it is told it lost events.
+  void MarkEvicted(uint64_t sequence) { evicted_ = std::max(evicted_, sequence); }
 
  private:
   std::deque<Ptr> events_;

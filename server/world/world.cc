@@ -5,6 +5,7 @@
 #include <random>
 
 #include "absl/strings/str_format.h"
+#include "openssl/sha.h"
 #include "absl/synchronization/mutex.h"
 
 namespace sportsim::server {
@@ -70,7 +71,7 @@ absl::Status CheckToken(const std::string& token, std::string_view what) {
 
 absl::StatusOr<std::vector<SeatEntry>> MakeSeats(
     uint32_t count, const google::protobuf::RepeatedPtrField<std::string>& names,
-    int default_count) {
+    int default_count, std::vector<std::string>* tokens) {
   if (count > 16 || names.size() > 16) {
     return absl::InvalidArgumentError(absl::StrFormat(
         "seats must be in [1, 16], got %d seats and %d seat_names", count, names.size()));
@@ -87,36 +88,45 @@ absl::StatusOr<std::vector<SeatEntry>> MakeSeats(
     }
   }
   std::vector<SeatEntry> seats;
+  tokens->clear();
   for (int i = 0; i < n; ++i) {
+    tokens->push_back(RandomHex(16));
     seats.push_back(SeatEntry{.name = names.size() > 0 ? names[i] : absl::StrFormat("%d", i),
-                              .token = RandomHex(16)});
+                              .token_hash = HashToken(tokens->back())});
   }
   return seats;
 }
 
-void SeatsToProto(const std::vector<SeatEntry>& seats, bool with_tokens,
+void SeatsToProto(const std::vector<SeatEntry>& seats, const std::vector<std::string>* tokens,
                   google::protobuf::RepeatedPtrField<v1::Seat>* out) {
   for (size_t i = 0; i < seats.size(); ++i) {
     v1::Seat* s = out->Add();
     s->set_seat(static_cast<uint32_t>(i));
     s->set_name(seats[i].name);
-    if (with_tokens) s->set_token(seats[i].token);
+    if (tokens != nullptr) s->set_token((*tokens)[i]);
   }
 }
 
-bool TokensEqual(const std::string& secret, const std::string& given) {
-  unsigned diff = secret.size() != given.size() ? 1u : 0u;
-  for (size_t j = 0; j < secret.size(); ++j) {
-    diff |= static_cast<unsigned char>(secret[j]) ^
-            static_cast<unsigned char>(j < given.size() ? given[j] : 0);
+std::string HashToken(std::string_view token) {
+  unsigned char digest[SHA256_DIGEST_LENGTH];
+  SHA256(reinterpret_cast<const unsigned char*>(token.data()), token.size(), digest);
+  return std::string(reinterpret_cast<const char*>(digest), sizeof digest);
+}
+
+bool TokensEqual(const std::string& secret_hash, const std::string& given_hash) {
+  unsigned diff = secret_hash.size() != given_hash.size() ? 1u : 0u;
+  for (size_t j = 0; j < secret_hash.size(); ++j) {
+    diff |= static_cast<unsigned char>(secret_hash[j]) ^
+            static_cast<unsigned char>(j < given_hash.size() ? given_hash[j] : 0);
   }
   return diff == 0;
 }
 
 int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token) {
+  const std::string hash = HashToken(token);
   int seat = -1;
   for (size_t i = 0; i < seats.size(); ++i) {
-    if (TokensEqual(seats[i].token, token)) seat = static_cast<int>(i);
+    if (TokensEqual(seats[i].token_hash, hash)) seat = static_cast<int>(i);
   }
   return seat;
 }

@@ -42,23 +42,30 @@ std::string RandomHex(int bytes);
 /// A token must be 1 to 128 characters (`what`: "CreateTable", "CreateSession").
 absl::Status CheckToken(const std::string& token, std::string_view what);
 
+/// SHA-256 of a token (32 bytes). A world keeps only these, in memory and in the journal, so
+/// that a copy of either hands out no seat. Tokens the server makes carry 128 random bits, so a
+/// fast hash without salt is enough (a password hash exists to slow down guessing low-entropy
+/// secrets; 2^128 guesses are out of reach at any speed).
+std::string HashToken(std::string_view token);
+
 struct SeatEntry {
   std::string name;
-  std::string token;  ///< 128 random bits, hex
+  std::string token_hash;  ///< HashToken of the seat's token (128 random bits, hex)
 };
 
 /// Seats for a create request: `count` (0: the number of names, or `default_count`) seats in
 /// [1, 16], each with a fresh token, named `names` (1 to 32 characters each) or "0", "1", ...
+/// The tokens themselves go to `tokens` (for the creator's reply only).
 absl::StatusOr<std::vector<SeatEntry>> MakeSeats(
     uint32_t count, const google::protobuf::RepeatedPtrField<std::string>& names,
-    int default_count);
+    int default_count, std::vector<std::string>* tokens);
 
-/// The seats as protos, with or without their tokens.
-void SeatsToProto(const std::vector<SeatEntry>& seats, bool with_tokens,
+/// The seats as protos, with their tokens when `tokens` is given (the creator's reply).
+void SeatsToProto(const std::vector<SeatEntry>& seats, const std::vector<std::string>* tokens,
                   google::protobuf::RepeatedPtrField<v1::Seat>* out);
 
-/// `given` equals `secret`, compared in time that depends only on the secret's length.
-bool TokensEqual(const std::string& secret, const std::string& given);
+/// `given_hash` equals `secret_hash`, compared in time that depends only on the secret's length.
+bool TokensEqual(const std::string& secret_hash, const std::string& given_hash);
 
 /// The seat whose token this is, or -1. Compares every seat in full (no early exit).
 int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token);

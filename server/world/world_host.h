@@ -32,6 +32,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -49,10 +51,12 @@
 #include "absl/synchronization/mutex.h"
 #include "absl/time/time.h"
 #include "server/world/event_log.h"
+#include "server/world/journal.h"
 #include "server/world/scheduler.h"
 #include "server/world/watcher.h"
 #include "server/world/world.h"
 #include "sim/core/check.h"
+#include "sportsim/store/v1/journal.pb.h"
 
 namespace sportsim::server {
 
@@ -116,7 +120,7 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   double tick_hz = 1.0;
   double period_s = 1.0;
   std::vector<SeatEntry> seats;
-  std::string admin_token;  ///< the game backend's ("" : none)
+  std::string admin_token_hash;  ///< HashToken of the game backend's token ("" : none)
 
   absl::Mutex mu;
   TickClock clock ABSL_GUARDED_BY(mu);
@@ -127,6 +131,16 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   bool deleted ABSL_GUARDED_BY(mu) = false;
   bool closed ABSL_GUARDED_BY(mu) = false;  ///< the server is shutting down
   uint64_t wake_generation ABSL_GUARDED_BY(mu) = 0;
+  // The journal (journal.h).
+  bool committing ABSL_GUARDED_BY(mu) = false;  ///< a command is being made durable: the
+                                                ///< world is frozen (no tick, no other call)
+  bool wake_skipped ABSL_GUARDED_BY(mu) = false;  ///< a wake came while committing
+  bool off_lock ABSL_GUARDED_BY(mu) = false;  ///< a tick's off-lock work runs: calls wait, so
+                                              ///< that a call never lands inside a tick
+  bool restoring ABSL_GUARDED_BY(mu) = false;   ///< being replayed: no wake acts on it
+  std::optional<int64_t> pinned_tick ABSL_GUARDED_BY(mu);  ///< a command's tick while it
+                                                           ///< commits and takes effect
+  uint64_t journal_index ABSL_GUARDED_BY(mu) = 0;  ///< the world's last journal entry
 
   /// UNAVAILABLE while shutting down, NOT_FOUND once deleted.
   absl::Status Gone() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -142,7 +156,7 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   absl::StatusOr<int> Authorize(const std::string& token) const
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     if (absl::Status gone = Gone(); !gone.ok()) return gone;
-    const bool admin = !admin_token.empty() && TokensEqual(admin_token, token);
+    const bool admin = !admin_token_hash.empty() && TokensEqual(admin_token_hash, HashToken(token));
     const int index = SeatOf(seats, token);
     if (admin) return kAdminSeat;
     if (index < 0) {
@@ -152,10 +166,13 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   }
   /// The tick the clock is at (never behind the last tick advanced).
   int64_t ClockTick(SteadyClock::time_point now) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    if (pinned_tick.has_value()) return *pinned_tick;
     return clock.Tick(now, tick);
   }
-  /// The tick now: the last one advanced while a run is in progress, else the clock's.
+  /// The tick now: a command's own tick while it takes effect; else the last one advanced while
+  /// a run is in progress, else the clock's.
   int64_t NowTick() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    if (pinned_tick.has_value()) return *pinned_tick;
     return Kind::Running(*this) ? tick : ClockTick(SteadyClock::now());
   }
   double WorldTime(int64_t k) const { return static_cast<double>(k) * period_s; }
@@ -183,6 +200,13 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
                    watchers.end());
   }
 };
+
+/// A request as the journal keeps it: serialized, its token cleared.
+template <typename Request>
+std::string JournalBody(Request request) {
+  request.clear_token();
+  return request.SerializeAsString();
+}
 
 /// A page of worlds (ListTables, ListSessions).
 struct PageRequest {
@@ -221,19 +245,95 @@ class WorldHost {
   /// A new world for the kind to fill before Add().
   std::shared_ptr<WorldT> Make() { return std::make_shared<WorldT>(this); }
 
-  /// Gives the world a fresh id and keeps it: RESOURCE_EXHAUSTED past max_worlds.
-  absl::Status Add(const std::shared_ptr<WorldT>& world) {
-    absl::MutexLock lock(&mu_);
-    if (shut_down_) return Unavailable();
-    if (static_cast<int>(worlds_.size()) >= limits_.max_worlds) {
-      return absl::ResourceExhaustedError(absl::StrFormat(
-          "the server holds its maximum of %d %ss (%s)", limits_.max_worlds, Kind::kNoun,
-          Kind::kMaxWorldsFlag));
+  /// The journal every accepted command of this host goes to (null: none, everything in
+  /// memory). Set before the first world is added.
+  void SetJournal(Journal* journal) { journal_ = journal; }
+  Journal* journal() const { return journal_; }
+
+  /// Gives the world a fresh id and keeps it: RESOURCE_EXHAUSTED past max_worlds. With a
+  /// journal, the creation (the seats' token hashes and `kind_body`, the kind's encoding of its
+  /// creation) is durable first: UNAVAILABLE, and nothing kept, when it cannot be made so.
+  absl::Status Add(const std::shared_ptr<WorldT>& world, std::string kind_body = {}) {
+    {
+      absl::MutexLock lock(&mu_);
+      if (shut_down_) return Unavailable();
+      if (static_cast<int>(worlds_.size()) + adding_ >= limits_.max_worlds) {
+        return absl::ResourceExhaustedError(absl::StrFormat(
+            "the server holds its maximum of %d %ss (%s)", limits_.max_worlds, Kind::kNoun,
+            Kind::kMaxWorldsFlag));
+      }
+      do {
+        world->id = std::string(Kind::kIdPrefix) + RandomHex(6);
+      } while (worlds_.count(world->id) > 0);
+      ++adding_;
     }
-    do {
-      world->id = std::string(Kind::kIdPrefix) + RandomHex(6);
-    } while (worlds_.count(world->id) > 0);
+    absl::Status durable = absl::OkStatus();
+    if (journal_ != nullptr) {
+      ::sportsim::store::v1::CreatedWorld created;
+      created.set_version(1);
+      for (const SeatEntry& seat : world->seats) {
+        ::sportsim::store::v1::StoredSeat* s = created.add_seats();
+        s->set_name(seat.name);
+        s->set_token_sha256(seat.token_hash);
+      }
+      created.set_admin_token_sha256(world->admin_token_hash);
+      created.set_tick_hz(world->tick_hz);
+      created.set_kind_body(std::move(kind_body));
+      durable = journal_->Append(JournalEntry{.world_id = world->id,
+                                              .kind = std::string(Kind::kNoun),
+                                              .index = 1,
+                                              .tick = 0,
+                                              .seat = kAdminSeat,
+                                              .type = 0,
+                                              .body = created.SerializeAsString(),
+                                              .anchor_s = journal_->NodeSeconds()});
+    }
+    absl::MutexLock lock(&mu_);
+    --adding_;
+    if (!durable.ok()) return durable;
+    {
+      absl::MutexLock wlock(&world->mu);
+      world->journal_index = 1;
+    }
     worlds_[world->id] = world;
+    return absl::OkStatus();
+  }
+
+  /// Makes a command durable before it takes effect. A kind calls it under the world's lock
+  /// from a call's function (Act), after every check and before any change: on an error
+  /// (UNAVAILABLE: the store is down) the call returns it and nothing changed. The command's
+  /// tick is the world's tick now; the world is frozen meanwhile (no tick advances, no other
+  /// call acts: the lock is released only for the wait), so the command takes effect at that
+  /// very tick, after it is durable, and the reply follows. `seat` is the seat the call was
+  /// authorized as, `body` the kind's encoding of the command (no token in it). While a world
+  /// is replayed, nothing is written.
+  absl::Status Commit(WorldT& w, int seat, uint32_t type, std::string body)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    const int64_t tick = w.NowTick();
+    if (w.restoring || journal_ == nullptr) {
+      w.pinned_tick = tick;
+      ++w.journal_index;
+      return absl::OkStatus();
+    }
+    JournalEntry entry{.world_id = w.id,
+                       .kind = std::string(Kind::kNoun),
+                       .index = w.journal_index + 1,
+                       .tick = tick,
+                       .seat = seat,
+                       .type = type,
+                       .body = std::move(body),
+                       .anchor_s = journal_->NodeSeconds()};
+    w.pinned_tick = tick;
+    w.committing = true;
+    w.mu.Unlock();
+    absl::Status durable = journal_->Append(std::move(entry));
+    w.mu.Lock();
+    w.committing = false;
+    if (!durable.ok()) {
+      w.pinned_tick.reset();
+      return durable;
+    }
+    ++w.journal_index;
     return absl::OkStatus();
   }
 
@@ -254,18 +354,40 @@ class WorldHost {
     Pump pump;
     absl::StatusOr<R> result;
     {
-      absl::MutexLock lock(&(*found)->mu);
+      WorldT& w = **found;
+      absl::MutexLock lock(&w.mu);
+      AwaitCommitted(w);
       // What fell due at rest before this call (a shot clock) takes effect first, at its own
       // tick: ticks decide, not which worker or call got to the world first.
-      if (!Kind::Running(**found) && RestDeadline(**found, SteadyClock::now(), &pump)) {
-        ScheduleRest(**found);
+      if (!Kind::Running(w) && RestDeadline(w, SteadyClock::now(), &pump)) {
+        ScheduleRest(w);
       }
-      absl::StatusOr<int> seat = (*found)->Authorize(token);
+      absl::StatusOr<int> seat = w.Authorize(token);
       if (!seat.ok()) return seat.status();
       result = fn(*found, *seat, pump);
+      AfterCall(w);
     }
     PumpAll(pump);
     return result;
+  }
+
+  /// Waits (releasing the lock meanwhile) until no command of `w` is being made durable and
+  /// no tick of it is running its off-lock work: a call acts between ticks, never inside one.
+  static void AwaitCommitted(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    w.mu.Await(absl::Condition(&Quiet, &w));
+  }
+  /// After a call's function: the command's tick is released, and a wake skipped while it
+  /// committed is made up for.
+  void AfterCall(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    w.pinned_tick.reset();
+    if (w.wake_skipped) {
+      w.wake_skipped = false;
+      if (Kind::Running(w)) {
+        ScheduleNextTick(w);
+      } else {
+        ScheduleRest(w);
+      }
+    }
   }
 
   /// One page of worlds in id order; `brief(world)` is called under each world's lock.
@@ -308,24 +430,46 @@ class WorldHost {
 
   /// Removes a world (any seat's token; `may_delete(world, seat)` may refuse under its lock),
   /// ends its run with `on_delete`, and closes every reader after a last frame.
+  /// With a journal, the deletion is durable first (the world leaves the store); `body` is
+  /// the kind's encoding of the request (no token).
   template <typename MayDelete, typename OnDelete>
   absl::Status Delete(const std::string& id, const std::string& token, MayDelete may_delete,
-                      OnDelete on_delete) {
+                      OnDelete on_delete, uint32_t type = 0, std::string body = {}) {
     if (absl::Status s = CheckWorldId(id); !s.ok()) return s;
     if (absl::Status s = CheckToken(token, Kind::kCreateRpc); !s.ok()) return s;
-    std::shared_ptr<WorldT> world;
+    absl::StatusOr<std::shared_ptr<WorldT>> found = Find(id);
+    if (!found.ok()) return found.status();
+    std::shared_ptr<WorldT> world = *std::move(found);
+    {
+      // The token is checked before anything changes; the world is frozen while its deletion
+      // is made durable.
+      absl::MutexLock wlock(&world->mu);
+      AwaitCommitted(*world);
+      absl::StatusOr<int> seat = world->Authorize(token);
+      if (!seat.ok()) return seat.status();
+      if (absl::Status s = may_delete(*world, *seat); !s.ok()) return s;
+      if (journal_ != nullptr) {
+        JournalEntry entry{.world_id = world->id,
+                           .kind = std::string(Kind::kNoun),
+                           .index = world->journal_index + 1,
+                           .tick = world->NowTick(),
+                           .seat = *seat,
+                           .type = type,
+                           .body = std::move(body),
+                           .anchor_s = journal_->NodeSeconds()};
+        world->committing = true;
+        world->mu.Unlock();
+        absl::Status durable = journal_->Remove(std::move(entry));
+        world->mu.Lock();
+        world->committing = false;
+        if (!durable.ok()) {
+          AfterCall(*world);
+          return durable;
+        }
+      }
+    }
     {
       absl::MutexLock lock(&mu_);
-      absl::StatusOr<std::shared_ptr<WorldT>> found = FindLocked(id);
-      if (!found.ok()) return found.status();
-      world = *std::move(found);
-      {
-        // The token is checked before anything changes.
-        absl::MutexLock wlock(&world->mu);
-        absl::StatusOr<int> seat = world->Authorize(token);
-        if (!seat.ok()) return seat.status();
-        if (absl::Status s = may_delete(*world, *seat); !s.ok()) return s;
-      }
       worlds_.erase(id);
     }
     Pump pump;
@@ -463,26 +607,40 @@ class WorldHost {
       w.mu.Unlock();
       return;
     }
+    if (w.committing) {
+      // A command is being made durable at the world's current tick: nothing moves until it
+      // took effect; the call reschedules this wake.
+      w.wake_skipped = true;
+      w.mu.Unlock();
+      return;
+    }
     if (!Kind::Running(w)) {
       RestDeadline(w, now, &pump);
       Heartbeat(w, now, &pump);
       ScheduleRest(w, now);
     } else if (const std::optional<CatchUpPlan> plan = CatchUp(w, now); plan.has_value()) {
       typename Kind::TickOut out;
-      const Advanced advanced = AdvanceTicks(w, *plan, &out);
-      if (OffLockWork work = Kind::OffLock(w, &out)) {
-        // Heavy work of this tick (a ball flight) runs without the world's lock: readers and
-        // calls go on meanwhile. A call that ended the run or the world supersedes the tick.
+      std::vector<EventPtr> fresh;
+      OffLockWork work;
+      const Advanced advanced = AdvanceTicks(w, *plan, &out, &fresh, &work, /*count=*/true);
+      if (work) {
+        // Heavy work of this tick (a ball flight) runs without the world's lock: readers go on
+        // meanwhile; calls wait for the tick to end (a call takes effect between ticks, as its
+        // replay does). A shutdown supersedes the tick.
         const uint64_t held = w.wake_generation;
+        w.off_lock = true;
         w.mu.Unlock();
         work();
         w.mu.Lock();
+        w.off_lock = false;
         if (Superseded(w, held)) {
+          // The ticks published before this one still reach the readers.
+          w.OfferAll(nullptr, fresh, &pump);
           w.mu.Unlock();
+          PumpAll(pump);
           return;
         }
       }
-      std::vector<EventPtr> fresh;
       PublishTick(w, &out, &fresh);
       if (advanced.end.has_value()) EndRun(w, *advanced.end, &fresh, &pump);
       CountEvents(fresh.size());
@@ -491,6 +649,119 @@ class WorldHost {
     }
     w.mu.Unlock();
     PumpAll(pump);
+  }
+
+  /// Recreates a world from the journal (journal.h) and keeps it under its own id:
+  /// `make(world, kind_body)` fills the kind's data as at creation (tick_hz is set);
+  /// `load(world, checkpoint)` puts the world as it was at rest (its tick and sequence too);
+  /// `replay(world, entry, pump)` applies one command as the call did (through the same code,
+  /// with the entry's seat; Commit then writes nothing). Between entries the world advances
+  /// tick by tick exactly as its ticks did, then on to the tick it had reached when its server
+  /// stopped (its clock paused meanwhile), and it goes on ticking from there. As fast as the
+  /// CPU allows; no reader sees the replay, and the event log is rebuilt by it.
+  template <typename MakeFn, typename LoadFn, typename ReplayFn>
+  absl::Status Restore(const StoredWorld& stored, MakeFn make, LoadFn load, ReplayFn replay) {
+    if (stored.entries.empty() || stored.entries.front().index != 1) {
+      return absl::DataLossError(absl::StrFormat("%s %s: the journal has no creation",
+                                                 Kind::kNoun, stored.world_id));
+    }
+    ::sportsim::store::v1::CreatedWorld created;
+    if (!created.ParseFromString(stored.entries.front().body) || created.tick_hz() <= 0) {
+      return absl::DataLossError(absl::StrFormat("%s %s: its creation does not parse",
+                                                 Kind::kNoun, stored.world_id));
+    }
+    std::shared_ptr<WorldT> world = Make();
+    WorldT& w = *world;
+    w.id = stored.world_id;
+    for (const ::sportsim::store::v1::StoredSeat& seat : created.seats()) {
+      w.seats.push_back(SeatEntry{.name = seat.name(), .token_hash = seat.token_sha256()});
+    }
+    w.admin_token_hash = created.admin_token_sha256();
+    w.tick_hz = created.tick_hz();
+    w.period_s = 1.0 / w.tick_hz;
+    if (absl::Status s = make(w, created.kind_body()); !s.ok()) {
+      return PrefixStatus(absl::StrFormat("%s %s: ", Kind::kNoun, stored.world_id), s);
+    }
+    Pump pump;  // nobody reads yet
+    {
+      absl::MutexLock lock(&w.mu);
+      w.restoring = true;
+      w.journal_index = 1;
+      w.clock.tick_hz = w.tick_hz * limits_.clock_rate;
+      if (!stored.checkpoint.empty()) {
+        if (absl::Status s = load(w, stored.checkpoint); !s.ok()) {
+          return PrefixStatus(
+              absl::StrFormat("%s %s: checkpoint: ", Kind::kNoun, stored.world_id), s);
+        }
+        w.log.MarkEvicted(w.sequence);
+        w.journal_index = stored.checkpoint_index;
+      }
+      for (const JournalEntry& e : stored.entries) {
+        if (e.index <= w.journal_index) continue;
+        if (e.index != w.journal_index + 1) {
+          return absl::DataLossError(absl::StrFormat("%s %s: journal entry %d is missing",
+                                                     Kind::kNoun, stored.world_id,
+                                                     w.journal_index + 1));
+        }
+        ReplayTo(w, e.tick, &pump);
+        w.pinned_tick = e.tick;
+        absl::Status applied = replay(w, e, pump);
+        w.pinned_tick.reset();
+        if (!applied.ok()) {
+          // The call took effect when it was made; the same code on the same state must too.
+          return absl::DataLossError(absl::StrFormat(
+              "%s %s: journal entry %d (type %d, tick %d) did not replay: %s", Kind::kNoun,
+              stored.world_id, e.index, e.type, e.tick, applied.message()));
+        }
+        w.journal_index = e.index;
+      }
+      // The tick the world had reached when its server stopped.
+      const double ran_s = std::max(0.0, stored.clock_s - stored.anchor_s);
+      const int64_t reached = std::max(
+          w.tick, stored.anchor_tick + static_cast<int64_t>(std::floor(ran_s * w.tick_hz)));
+      ReplayTo(w, reached, &pump);
+      const SteadyClock::time_point now = SteadyClock::now();
+      w.clock.origin =
+          now - std::chrono::nanoseconds(std::llround(static_cast<double>(reached) * 1e9 /
+                                                      w.clock.tick_hz));
+      w.restoring = false;
+      if (Kind::Running(w)) {
+        ScheduleNextTick(w);
+      } else {
+        ScheduleRest(w, now);
+      }
+      if (journal_ != nullptr) journal_->Anchor(w.id, reached, journal_->NodeSeconds());
+    }
+    absl::MutexLock lock(&mu_);
+    if (shut_down_) return Unavailable();
+    if (!worlds_.emplace(w.id, world).second) {
+      return absl::AlreadyExistsError(
+          absl::StrFormat("%s %s is already served", Kind::kNoun, w.id));
+    }
+    return absl::OkStatus();
+  }
+
+  /// Replay: advances `w` to tick `target` as its ticks would (runs tick by tick, published
+  /// the same way; at rest, what falls due by then), with no clock and no reader.
+  void ReplayTo(WorldT& w, int64_t target, Pump* pump) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    for (;;) {
+      if (!Kind::Running(w)) {
+        const std::optional<int64_t> d = Kind::RestDeadline(w);
+        if (!d.has_value() || *d > target) return;
+        FireRestDeadline(w, *d, pump);
+        continue;
+      }
+      if (w.tick >= target) return;
+      typename Kind::TickOut out;
+      std::vector<EventPtr> fresh;
+      OffLockWork work;
+      const Advanced advanced =
+          AdvanceTicks(w, CatchUpPlan{.due = w.tick + 1, .target = target}, &out, &fresh, &work,
+                       /*count=*/false);
+      if (work) work();
+      PublishTick(w, &out, &fresh);
+      if (advanced.end.has_value()) EndRun(w, *advanced.end, &fresh, pump);
+    }
   }
 
   /// Ends every stream with `status` after a last snapshot and stops ticking (stops the
@@ -583,7 +854,10 @@ class WorldHost {
 
   // Stage 1: a wake for a world deleted, closed or scheduled again since is dropped.
   static bool Superseded(const WorldT& w, uint64_t generation) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
-    return w.deleted || w.closed || generation != w.wake_generation;
+    return w.deleted || w.closed || w.restoring || generation != w.wake_generation;
+  }
+  static bool Quiet(WorldT* w) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+    return !w->committing && !w->off_lock;
   }
 
   // Stage 2a (at rest): what falls due at a tick while nothing moves (a shot clock), at that
@@ -593,13 +867,17 @@ class WorldHost {
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     const std::optional<int64_t> deadline = Kind::RestDeadline(w);
     if (!deadline.has_value() || w.clock.DueTick(now) < *deadline) return false;
-    w.tick = std::max(w.tick, *deadline);
+    FireRestDeadline(w, *deadline, pump);
+    return true;
+  }
+  void FireRestDeadline(WorldT& w, int64_t deadline, Pump* pump)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    w.tick = std::max(w.tick, deadline);
     ++w.sequence;
     std::vector<EventPtr> fresh;
     Kind::AtRestDeadline(*this, w, &fresh);
     CountEvents(fresh.size());
     w.OfferAll(w.MakeFrame(w.tick, false, true), fresh, pump);
-    return true;
   }
 
   // Stage 2b (at rest): a heartbeat for the readers.
@@ -628,20 +906,31 @@ class WorldHost {
   }
 
   // Stage 4: tick by tick to the target, so that the tick a run ends on does not depend on
-  // how many ticks one wake covers; then count the ticks and the late ones (advanced more than
-  // a period after their deadline).
-  Advanced AdvanceTicks(WorldT& w, const CatchUpPlan& plan, typename Kind::TickOut* out)
+  // how many ticks one wake covers. Every tick but the last is published as it is advanced
+  // (its own sequence number, its own events), so that sequence numbers and the event log are
+  // a function of ticks and commands, never of how ticks were grouped into wakes (a restore
+  // replays them exactly). The last tick (the target, the run's end, or a tick with off-lock
+  // work, which ends the wake early) is left in `out` for the later stages. Then count the
+  // ticks and the late ones (advanced more than a period after their deadline).
+  Advanced AdvanceTicks(WorldT& w, const CatchUpPlan& plan, typename Kind::TickOut* out,
+                        std::vector<EventPtr>* fresh, OffLockWork* work, bool count)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     Advanced a;
-    int64_t k = w.tick;
-    while (k < plan.target && !a.end.has_value()) {
-      ++k;
+    const int64_t from = w.tick;
+    while (w.tick < plan.target) {
+      const int64_t k = w.tick + 1;
       a.end = Kind::AdvanceTick(*this, w, k, out);
+      w.tick = k;
+      *work = Kind::OffLock(w, out);
+      if (a.end.has_value() || *work || k == plan.target) break;
+      PublishTick(w, out, fresh);
+      *out = typename Kind::TickOut{};
     }
-    const int64_t late = std::min(k, plan.due - 1) - w.tick;
-    if (late > 0) late_ticks_.fetch_add(late);
-    ticks_.fetch_add(k - w.tick);
-    w.tick = k;
+    if (count) {
+      const int64_t late = std::min(w.tick, plan.due - 1) - from;
+      if (late > 0) late_ticks_.fetch_add(late);
+      ticks_.fetch_add(w.tick - from);
+    }
     return a;
   }
 
@@ -684,7 +973,9 @@ class WorldHost {
   const std::shared_ptr<WatchCounters> counters_;
   mutable absl::Mutex mu_;
   std::map<std::string, std::shared_ptr<WorldT>, std::less<>> worlds_ ABSL_GUARDED_BY(mu_);
+  int adding_ ABSL_GUARDED_BY(mu_) = 0;  ///< worlds whose creation is being made durable
   bool shut_down_ ABSL_GUARDED_BY(mu_) = false;
+  Journal* journal_ = nullptr;
   std::unique_ptr<TickScheduler> own_scheduler_;
   TickScheduler* scheduler_;
   std::atomic<int64_t> ticks_{0}, late_ticks_{0}, slipped_ticks_{0}, events_{0};

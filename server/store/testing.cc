@@ -1,0 +1,26 @@
+#include "server/store/testing.h"
+
+#include "server/store/store_internal.h"
+
+namespace sportsim::server::store {
+namespace {
+
+StoreInternals& Internals(Store& store) { return dynamic_cast<StoreInternals&>(store); }
+
+}  // namespace
+
+StoreStats StatsForTesting(Store& store) {
+  const GroupCommitStats s = Internals(store).writer().stats();
+  return StoreStats{.batches = s.batches,
+                    .ops = s.ops,
+                    .failed_batches = s.failed_batches,
+                    .clock_persists = s.clock_persists};
+}
+
+absl::Status ExecForTesting(Store& store, const std::string& sql) {
+  return Internals(store).ExecForTesting(sql);
+}
+
+void StopClockForTesting(Store& store) { Internals(store).writer().StopClockForTesting(); }
+
+}  // namespace sportsim::server::store

@@ -1,0 +1,561 @@
+"""Durability against the real server binary: kill -9 in the middle of shots, matches and swings,
+restart on the same journal (SQLite in a temporary directory; PostgreSQL 15 started here in a
+throwaway cluster), and check that every world comes back with its ids, tokens, turn, scores and
+sequence, and that what was in flight ends bit-identical to an uninterrupted run."""
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.environ["SPORTSIM_PYTHON_STUBS"])
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "support"))
+
+import grpc  # noqa: E402
+import health_pb2  # noqa: E402
+import health_pb2_grpc  # noqa: E402
+from sportsim.v1 import billiards_pb2 as bp  # noqa: E402
+from sportsim.v1 import billiards_pb2_grpc as bg  # noqa: E402
+from sportsim.v1 import swing_pb2 as sp  # noqa: E402
+from sportsim.v1 import swing_pb2_grpc as sg  # noqa: E402
+from server_proc import ServerProcess  # noqa: E402
+
+SERVER = os.path.join(os.environ["SPORTSIM_BIN_DIR"], "sportsim-server")
+PG_BIN = "/usr/lib/postgresql/15/bin"
+BREAK = bp.CueStrike(ball_speed_mps=8.0, phi_deg=0.5)
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class PostgresCluster:
+    """A throwaway PostgreSQL 15 cluster on a loopback port, run as an unprivileged user (initdb
+    and pg_ctl refuse root)."""
+
+    def __init__(self):
+        self.dir = tempfile.mkdtemp(prefix="sportsim-pg-")
+        os.chmod(self.dir, 0o755)
+        self.data = os.path.join(self.dir, "pg")
+        os.mkdir(self.data)
+        self.port = free_port()
+        self.as_user = []
+        if os.geteuid() == 0:
+            shutil.chown(self.data, "nobody")
+            self.as_user = ["runuser", "-u", "nobody", "--"]
+        self._run("initdb", "-D", self.data, "-U", "sportsim", "--auth=trust", "-N")
+        self.start()
+        self._run("createdb", "-h", "127.0.0.1", "-p", str(self.port), "-U", "sportsim",
+                  "sportsim")
+        self.uri = "postgresql://sportsim@127.0.0.1:%d/sportsim" % self.port
+
+    def _run(self, tool, *args):
+        subprocess.run(self.as_user + [os.path.join(PG_BIN, tool), *args], check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+    def start(self):
+        self._run("pg_ctl", "-D", self.data, "-o",
+                  "-p %d -k %s -c listen_addresses=127.0.0.1 -c fsync=on" % (self.port, self.data),
+                  "-l", os.path.join(self.data, "log"), "-w", "start")
+
+    def stop(self):
+        self._run("pg_ctl", "-D", self.data, "-m", "immediate", "-w", "stop")
+
+    def close(self):
+        try:
+            self.stop()
+        except subprocess.CalledProcessError:
+            pass
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+class Server:
+    """A server on a journal, killable with SIGKILL and restartable on the same journal."""
+
+    def __init__(self, journal_args, *extra):
+        self.args = list(journal_args) + list(extra)
+        self.proc = ServerProcess(SERVER, *self.args)
+        self.channel = grpc.insecure_channel(self.proc.address)
+        grpc.channel_ready_future(self.channel).result(timeout=30)
+        self.tables = bg.BilliardsStub(self.channel)
+        self.swings = sg.SwingStub(self.channel)
+        self.health = health_pb2_grpc.HealthStub(self.channel)
+
+    def kill9(self):
+        self.proc.proc.send_signal(signal.SIGKILL)
+        self.proc.proc.wait()
+        self._close()
+
+    def stop(self):
+        if self.proc.proc.poll() is None:
+            self.proc.terminate()
+        self._close()
+
+    def _close(self):
+        self.channel.close()
+        for pipe in (self.proc.proc.stdout, self.proc.proc.stderr):
+            if pipe is not None:
+                pipe.close()
+
+    def serving(self):
+        return self.health.Check(health_pb2.HealthCheckRequest(), timeout=10).status
+
+
+def ball_bits(balls):
+    """The balls as exact tuples (every double compared by value, bit for bit in practice)."""
+    return [(b.id, b.state, b.x_m, b.y_m, b.vx_mps, b.vy_mps, b.wx_rps, b.wy_rps, b.wz_rps,
+             b.pocket) for b in balls]
+
+
+def event_key(e, t0=0.0):
+    """An engine event; a table's events carry table time, a shot's its own from 0 (t0)."""
+    return (e.kind, round(e.t_s - t0, 9), tuple(e.balls), e.cushion, e.pocket)
+
+
+def place_cue_ball(server, tid, token, info):
+    """Ball in hand: puts the cue ball on the first free spot the referee accepts."""
+    for x, y in [(-0.6, 0.0), (-0.6, 0.3), (-0.6, -0.3), (-0.8, 0.15), (-0.4, 0.45),
+                 (0.3, 0.4), (-0.9, -0.4), (0.6, -0.45), (0.0, -0.55), (-1.0, 0.5)]:
+        try:
+            server.tables.PlaceBall(bp.PlaceBallRequest(
+                table_id=tid, token=token, ball=bp.BallPlacement(id="cue", x_m=x, y_m=y)),
+                timeout=10)
+            return
+        except grpc.RpcError as e:
+            if e.code() not in (grpc.StatusCode.INVALID_ARGUMENT,
+                                grpc.StatusCode.FAILED_PRECONDITION):
+                raise
+    raise AssertionError("no spot for the cue ball: %s" % info.game)
+
+
+def wait_at_rest(server, table_id, timeout=60):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        info = server.tables.GetTable(bp.GetTableRequest(table_id=table_id), timeout=10)
+        if info.at_rest:
+            return info
+        time.sleep(0.05)
+    raise AssertionError("table %s still moving after %g s" % (table_id, timeout))
+
+
+def take_turn(server, tid, tokens, strike):
+    """A ruled game's next shot by the seat to play: the pending decision taken (its first
+    choice), the cue ball placed when in hand, a safety declared when a call is required."""
+    info = wait_at_rest(server, tid)
+    if info.game.HasField("decision") and info.game.decision.choices:
+        server.tables.Decide(bp.DecideRequest(table_id=tid, token=tokens[info.game.to_play],
+                                              choice=info.game.decision.choices[0]), timeout=10)
+        info = wait_at_rest(server, tid)
+    if info.game.ball_in_hand not in ("", "none"):
+        place_cue_ball(server, tid, tokens[info.game.to_play], info)
+    req = bp.ShootRequest(table_id=tid, token=tokens[info.game.to_play], strike=strike)
+    if info.game.call_required:
+        req.call.safety = True
+    server.tables.Shoot(req, timeout=10)
+
+
+class Watcher(threading.Thread):
+    """Collects a table's events and the last sequence seen, until the stream ends."""
+
+    def __init__(self, server, table_id, from_sequence=None):
+        super().__init__(daemon=True)
+        req = bp.WatchTableRequest(table_id=table_id)
+        if from_sequence is not None:
+            req.from_sequence = from_sequence
+        self.stream = server.tables.WatchTable(req)
+        self.events, self.sequence, self.resync = [], 0, False
+        self.start()
+
+    def run(self):
+        try:
+            for snap in self.stream:
+                self.events.extend(snap.events)
+                self.sequence = max(self.sequence, snap.sequence)
+                self.resync = self.resync or snap.resync
+        except grpc.RpcError:
+            pass
+
+
+class DurabilityBase:
+    """The restart tests, for a journal given by journal_args()."""
+
+    def journal_args(self):
+        raise NotImplementedError
+
+    def start(self, *extra):
+        return Server(self.journal_args(), *extra)
+
+    def shot_mid_flight(self, solver):
+        rack = bp.TableSetup(preset="pool-9ft", rack="9ball")
+        s = self.start()
+        created = s.tables.CreateTable(bp.CreateTableRequest(table=rack, solver=solver),
+                                       timeout=30)
+        tid, tokens = created.table_id, [seat.token for seat in created.seats]
+        watcher = Watcher(s, tid)
+        time.sleep(0.3)
+        shot = s.tables.Shoot(bp.ShootRequest(table_id=tid, token=tokens[0], strike=BREAK),
+                              timeout=30)
+        time.sleep(0.6)  # the break runs for seconds of table time
+        before = s.tables.GetTable(bp.GetTableRequest(table_id=tid), timeout=10)
+        self.assertFalse(before.at_rest, "kill the server mid-shot")
+        s.kill9()
+        watcher.join(timeout=10)
+        seen = watcher.sequence
+        self.assertGreater(seen, 0)
+
+        s = self.start()
+        try:
+            info = s.tables.GetTable(bp.GetTableRequest(table_id=tid), timeout=10)
+            self.assertEqual(info.table_id, tid)
+            self.assertEqual(info.shots, 1)
+            # The clock paused while no server ran: the table resumes where it was (within the
+            # journal's clock interval), never behind what a watcher saw.
+            self.assertGreaterEqual(info.tick, before.tick)
+            self.assertLess(info.tick, before.tick + 120)
+            self.assertGreaterEqual(info.sequence, seen)
+            resumed = Watcher(s, tid, from_sequence=seen)
+            end = wait_at_rest(s, tid)
+            time.sleep(0.3)
+            resumed.stream.cancel()
+            resumed.join(timeout=10)
+            self.assertFalse(resumed.resync)
+
+            alone = s.tables.SimulateShot(bp.SimulateShotRequest(table=rack, strike=BREAK,
+                                                                 solver=solver), timeout=60)
+            self.assertEqual(ball_bits(end.balls), ball_bits(alone.balls))
+            # Every event of the shot reached a watcher once, across the crash, in order.
+            events = [e for e in watcher.events + resumed.events if e.shot_id == shot.shot_id]
+            t0 = next(e.t_s for e in events if e.kind == bp.shot)
+            engine = [event_key(e, t0) for e in events if e.kind not in (bp.shot, bp.shot_end)]
+            self.assertEqual(engine, [event_key(e) for e in alone.events])
+            seqs = [e.sequence for e in events]
+            self.assertEqual(seqs, sorted(seqs))
+            # The seats' tokens still work, and only they.
+            s.tables.SetTurn(bp.SetTurnRequest(table_id=tid, token=tokens[0], seat=1),
+                             timeout=10)
+            with self.assertRaises(grpc.RpcError) as e:
+                s.tables.SetTurn(bp.SetTurnRequest(table_id=tid, token="x" * 32, seat=0),
+                                 timeout=10)
+            self.assertEqual(e.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
+        finally:
+            s.stop()
+
+    def test_event_engine_shot_survives_kill9(self):
+        self.shot_mid_flight(bp.SolverConfig())
+
+    def test_stepped_engine_shot_survives_kill9(self):
+        self.shot_mid_flight(bp.SolverConfig(engine=bp.ENGINE_STEPPED))
+
+    def test_ruled_match_survives_kill9(self):
+        game = bp.GameConfig(name="9ball", race_to=2, noise=0.5, seed=42, shot_clock_s=30)
+        strikes = [BREAK] + [bp.CueStrike(ball_speed_mps=2.0 + 0.3 * i, phi_deg=37.0 * i)
+                             for i in range(1, 6)]
+
+        def play(server, kill_after=None):
+            created = server.tables.CreateTable(bp.CreateTableRequest(game=game), timeout=30)
+            tid = created.table_id
+            tokens = [seat.token for seat in created.seats]
+            for i, strike in enumerate(strikes):
+                take_turn(server, tid, tokens, strike)
+                if kill_after == i:
+                    time.sleep(0.3)
+                    return tid, tokens, server.tables.GetTable(bp.GetTableRequest(table_id=tid),
+                                                               timeout=10)
+            return tid, tokens, wait_at_rest(server, tid)
+
+        # The uninterrupted match, in memory, with the same secret seed.
+        ref = Server([], "--clock_rate", "20")
+        try:
+            _, _, ref_end = play(ref)
+            ref_record = ref.tables.GetMatchRecord(
+                bp.GetMatchRecordRequest(table_id=ref_end.table_id), timeout=10)
+        finally:
+            ref.stop()
+
+        s = self.start("--clock_rate", "2")
+        tid, tokens, mid = play(s, kill_after=3)
+        self.assertFalse(mid.at_rest)
+        s.kill9()
+        s = self.start("--clock_rate", "2")
+        try:
+            info = s.tables.GetTable(bp.GetTableRequest(table_id=tid), timeout=10)
+            self.assertEqual(info.shots, mid.shots)
+            self.assertEqual(info.game.frames_won, mid.game.frames_won)
+            end = wait_at_rest(s, tid)
+            # Play on to the same number of shots and compare with the uninterrupted match; the
+            # server dies once more mid-shot after a checkpoint (every 4 shots), so the second
+            # restore starts from the checkpoint and replays what followed it.
+            for k, strike in enumerate(strikes[4:]):
+                if k == 1:
+                    time.sleep(0.2)
+                    s.kill9()
+                    s = self.start("--clock_rate", "2")
+                take_turn(s, tid, tokens, strike)
+            end = wait_at_rest(s, tid)
+            self.assertEqual(ball_bits(end.balls), ball_bits(ref_end.balls))
+            self.assertEqual(end.game.scores, ref_end.game.scores)
+            self.assertEqual(end.game.to_play, ref_end.game.to_play)
+            record = s.tables.GetMatchRecord(bp.GetMatchRecordRequest(table_id=tid), timeout=10)
+            self.assertEqual([(a.kind, a.seat) for a in record.actions],
+                             [(a.kind, a.seat) for a in ref_record.actions])
+            self.assertEqual([a.verdict for a in record.actions],
+                             [a.verdict for a in ref_record.actions])
+        finally:
+            s.stop()
+
+    def test_driven_swing_survives_kill9(self):
+        # Slow motion (table time at a tenth of real time) so that the kill lands mid-swing.
+        commands = [sp.TorqueCommand(t_s=0.05 * k, qalpha_nm=60 + 5 * k, qbeta_nm=10 - k)
+                    for k in range(1, 6)]
+
+        def drive(server):
+            created = server.swings.CreateSession(sp.CreateSessionRequest(), timeout=30)
+            sid, token = created.session_id, created.token
+            msgs = [sp.DriveSwingRequest(start=sp.DriveStart(
+                session_id=sid, token=token, qalpha_nm=60, qbeta_nm=10))]
+            msgs += [sp.DriveSwingRequest(torque=c) for c in commands]
+            done = threading.Event()
+
+            def requests():
+                for m in msgs:
+                    yield m
+                done.wait(30)
+
+            stream = server.swings.DriveSwing(requests())
+            first = next(stream)  # the swing started
+            return sid, token, stream, first, done
+
+        ref = Server([], "--clock_rate", "0.1")
+        try:
+            sid, _, stream, _, done = drive(ref)
+            for _ in stream:
+                pass
+            done.set()
+            ref_info = ref.swings.GetSession(sp.GetSessionRequest(session_id=sid), timeout=10)
+        finally:
+            ref.stop()
+
+        s = self.start("--clock_rate", "0.1")
+        sid, token, stream, first, done = drive(s)
+        time.sleep(1.0)  # 0.1 s of swing time: every command accepted, the swing not over
+        mid = s.swings.GetSession(sp.GetSessionRequest(session_id=sid), timeout=10)
+        self.assertIn("SWINGING", sp.SwingPhase.Name(mid.phase))
+        s.kill9()
+        done.set()
+        s = self.start("--clock_rate", "0.1")
+        try:
+            deadline = time.monotonic() + 60
+            while True:
+                info = s.swings.GetSession(sp.GetSessionRequest(session_id=sid), timeout=10)
+                if "SWINGING" not in sp.SwingPhase.Name(info.phase):
+                    break
+                self.assertLess(time.monotonic(), deadline)
+                time.sleep(0.1)
+            self.assertEqual(info.swings, 1)
+            self.assertTrue(info.HasField("last_impact"))
+            self.assertEqual(info.last_impact, ref_info.last_impact)
+            s.swings.ResetSwing(sp.ResetSwingRequest(session_id=sid, token=token), timeout=10)
+        finally:
+            s.stop()
+
+    def test_kill9_while_many_tables_shoot(self):
+        s = self.start("--clock_rate", "4")
+        rack = bp.TableSetup(preset="pool-9ft", rack="9ball")
+        tables = []
+        for _ in range(40):
+            c = s.tables.CreateTable(bp.CreateTableRequest(table=rack), timeout=30)
+            tables.append((c.table_id, c.seats[0].token))
+        acked = {}
+        stop = threading.Event()
+
+        def shooter(tid, token):
+            n = 0
+            while not stop.is_set():
+                try:
+                    s.tables.Shoot(bp.ShootRequest(
+                        table_id=tid, token=token,
+                        strike=bp.CueStrike(ball_speed_mps=0.3 + 0.01 * n, phi_deg=n)),
+                        timeout=5)
+                    n += 1
+                    acked[tid] = n
+                except grpc.RpcError as e:
+                    if e.code() == grpc.StatusCode.FAILED_PRECONDITION:
+                        time.sleep(0.01)  # still moving
+                        continue
+                    return  # the server died
+                except ValueError:
+                    return  # its channel was closed
+
+        threads = [threading.Thread(target=shooter, args=t, daemon=True) for t in tables]
+        for t in threads:
+            t.start()
+        time.sleep(2.0)
+        s.kill9()
+        stop.set()
+        for t in threads:
+            t.join(timeout=10)
+        self.assertGreater(sum(acked.values()), 40)
+        s = self.start("--clock_rate", "4")
+        try:
+            for tid, _ in tables:
+                info = s.tables.GetTable(bp.GetTableRequest(table_id=tid), timeout=10)
+                # Every acknowledged shot is there; at most the one in flight at the kill more.
+                self.assertGreaterEqual(info.shots, acked.get(tid, 0))
+                self.assertLessEqual(info.shots, acked.get(tid, 0) + 1)
+        finally:
+            s.stop()
+
+
+class SqliteDurability(DurabilityBase, unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="sportsim-data-")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def journal_args(self):
+        return ["--data_dir", self.dir]
+
+    def test_a_second_server_on_the_same_directory_refuses_to_start(self):
+        s = self.start()
+        try:
+            p = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--data_dir", self.dir],
+                               capture_output=True, text=True, timeout=30)
+            self.assertEqual(p.returncode, 2)
+            self.assertIn(self.dir, p.stderr)
+            self.assertIn("in use", p.stderr)
+        finally:
+            s.stop()
+
+    def test_an_unwritable_data_dir_is_a_clear_error_at_start(self):
+        blocker = os.path.join(self.dir, "file")
+        with open(blocker, "w") as f:
+            f.write("not a directory")
+        p = subprocess.run([SERVER, "--listen", "127.0.0.1:0", "--data_dir",
+                            os.path.join(blocker, "data")],
+                           capture_output=True, text=True, timeout=30)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("data", p.stderr)
+
+    def test_a_deleted_table_leaves_the_store(self):
+        s = self.start()
+        c = s.tables.CreateTable(bp.CreateTableRequest(), timeout=30)
+        s.tables.DeleteTable(bp.DeleteTableRequest(table_id=c.table_id,
+                                                   token=c.seats[0].token), timeout=10)
+        s.kill9()
+        s = self.start()
+        try:
+            listed = s.tables.ListTables(bp.ListTablesRequest(), timeout=10)
+            self.assertEqual(listed.total, 0)
+        finally:
+            s.stop()
+
+
+class PostgresDurability(DurabilityBase, unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.pg = PostgresCluster()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.pg.close()
+
+    def setUp(self):
+        self.node = "node-%s" % self.id().split(".")[-1][-20:]
+
+    def journal_args(self):
+        return ["--store", self.pg.uri, "--node", self.node, "--lease", "2s"]
+
+    def test_takeover_after_the_lease(self):
+        rack = bp.TableSetup(preset="pool-9ft", rack="9ball")
+        a = self.start()
+        created = a.tables.CreateTable(bp.CreateTableRequest(table=rack), timeout=30)
+        tid, token = created.table_id, created.seats[0].token
+        a.tables.Shoot(bp.ShootRequest(table_id=tid, token=token, strike=BREAK), timeout=10)
+        time.sleep(0.5)
+        a.kill9()
+        b = Server(["--store", self.pg.uri, "--node", self.node + "-b", "--lease", "2s",
+                    "--adopt"])
+        try:
+            deadline = time.monotonic() + 20
+            while True:
+                try:
+                    b.tables.GetTable(bp.GetTableRequest(table_id=tid), timeout=10)
+                    break
+                except grpc.RpcError as e:
+                    self.assertEqual(e.code(), grpc.StatusCode.NOT_FOUND)
+                    self.assertLess(time.monotonic(), deadline, "B never adopted A's table")
+                    time.sleep(0.2)
+            end = wait_at_rest(b, tid)
+            alone = b.tables.SimulateShot(bp.SimulateShotRequest(table=rack, strike=BREAK),
+                                          timeout=60)
+            self.assertEqual(ball_bits(end.balls), ball_bits(alone.balls))
+            b.tables.SetTurn(bp.SetTurnRequest(table_id=tid, token=token, seat=1), timeout=10)
+        finally:
+            b.stop()
+
+    def test_a_node_that_lost_its_lease_cannot_write(self):
+        a = self.start()
+        created = a.tables.CreateTable(bp.CreateTableRequest(), timeout=30)
+        tid, token = created.table_id, created.seats[0].token
+        a.proc.proc.send_signal(signal.SIGSTOP)  # frozen past its lease
+        b = Server(["--store", self.pg.uri, "--node", self.node + "-b", "--lease", "2s",
+                    "--adopt"])
+        try:
+            deadline = time.monotonic() + 20
+            while True:
+                try:
+                    b.tables.GetTable(bp.GetTableRequest(table_id=tid), timeout=10)
+                    break
+                except grpc.RpcError:
+                    self.assertLess(time.monotonic(), deadline)
+                    time.sleep(0.2)
+            a.proc.proc.send_signal(signal.SIGCONT)
+            with self.assertRaises(grpc.RpcError) as e:
+                a.tables.SetTurn(bp.SetTurnRequest(table_id=tid, token=token, seat=1), timeout=10)
+            self.assertEqual(e.exception.code(), grpc.StatusCode.UNAVAILABLE)
+            # B serves it, and A's attempt changed nothing.
+            self.assertEqual(b.tables.GetTable(bp.GetTableRequest(table_id=tid),
+                                               timeout=10).turn, 0)
+        finally:
+            a.proc.proc.send_signal(signal.SIGCONT)
+            a.stop()
+            b.stop()
+
+    def test_the_database_stopped_under_a_running_server(self):
+        s = self.start()
+        try:
+            created = s.tables.CreateTable(bp.CreateTableRequest(), timeout=30)
+            tid, token = created.table_id, created.seats[0].token
+            self.pg.stop()
+            try:
+                with self.assertRaises(grpc.RpcError) as e:
+                    s.tables.SetTurn(bp.SetTurnRequest(table_id=tid, token=token, seat=1),
+                                     timeout=15)
+                self.assertEqual(e.exception.code(), grpc.StatusCode.UNAVAILABLE)
+                self.assertEqual(s.tables.GetTable(bp.GetTableRequest(table_id=tid),
+                                                   timeout=10).turn, 0)
+                deadline = time.monotonic() + 10
+                while s.serving() != health_pb2.HealthCheckResponse.NOT_SERVING:
+                    self.assertLess(time.monotonic(), deadline)
+                    time.sleep(0.1)
+            finally:
+                self.pg.start()
+            deadline = time.monotonic() + 20
+            while s.serving() != health_pb2.HealthCheckResponse.SERVING:
+                self.assertLess(time.monotonic(), deadline)
+                time.sleep(0.2)
+            s.tables.SetTurn(bp.SetTurnRequest(table_id=tid, token=token, seat=1), timeout=10)
+        finally:
+            s.stop()
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
