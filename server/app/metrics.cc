@@ -10,6 +10,8 @@
 #include <prometheus/metric_family.h>
 
 #include <exception>
+#include <map>
+#include <tuple>
 #include <vector>
 
 #include "absl/strings/str_format.h"
@@ -135,8 +137,13 @@ void AddHistogram(MetricFamily* f, const LatencyHistogram& h,
 class Collector final : public prometheus::Collectable {
  public:
   Collector(TableRegistry* tables, SessionRegistry* sessions, TickScheduler* scheduler,
-            WorkPool* pool, RpcCounters* rpcs)
-      : tables_(tables), sessions_(sessions), scheduler_(scheduler), pool_(pool), rpcs_(rpcs) {}
+            WorkPool* pool, RpcCounters* rpcs, store::Store* journal)
+      : tables_(tables),
+        sessions_(sessions),
+        scheduler_(scheduler),
+        pool_(pool),
+        rpcs_(rpcs),
+        journal_(journal) {}
 
   std::vector<MetricFamily> Collect() const override {
     // One row per kind of world: a new kind is one more entry here.
@@ -244,6 +251,27 @@ class Collector final : public prometheus::Collectable {
       Add(&f, static_cast<double>(pool_->budget_exhausted()));
       out.push_back(std::move(f));
     }
+    if (journal_ != nullptr) {
+      const store::StoreStats j = journal_->stats();
+      for (const auto& [name, help, value] :
+           {std::tuple{"sportsim_journal_commits_total",
+                       "Journal write transactions committed (each one sync to disk)",
+                       j.batches},
+            std::tuple{"sportsim_journal_writes_total",
+                       "Journal writes committed (commands, creations, deletions, checkpoints)",
+                       j.ops},
+            std::tuple{"sportsim_journal_failed_commits_total",
+                       "Journal write transactions that failed (their commands were refused)",
+                       j.failed_batches}}) {
+        MetricFamily f = Family(name, help, MetricType::Counter);
+        Add(&f, static_cast<double>(value));
+        out.push_back(std::move(f));
+      }
+      MetricFamily up = Family("sportsim_journal_up",
+                               "1 while commands can be made durable, else 0", MetricType::Gauge);
+      Add(&up, journal_->Healthy().ok() ? 1.0 : 0.0);
+      out.push_back(std::move(up));
+    }
     // Rejected inputs: RPCs ending with a caller-error code, and refused DriveSwing commands.
     std::map<int, int64_t> rejected;
     MetricFamily rpcs = Family("sportsim_rpcs_total", "RPCs finished, by method and status code",
@@ -275,6 +303,7 @@ class Collector final : public prometheus::Collectable {
   TickScheduler* const scheduler_;
   WorkPool* const pool_;
   RpcCounters* const rpcs_;
+  store::Store* const journal_;  // null: no journal
 };
 
 }  // namespace
@@ -286,9 +315,9 @@ std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface> MakeRpcCo
 
 absl::StatusOr<std::unique_ptr<MetricsEndpoint>> MetricsEndpoint::Start(
     const std::string& listen, TableRegistry* tables, SessionRegistry* sessions,
-    TickScheduler* scheduler, WorkPool* pool, RpcCounters* rpcs) {
+    TickScheduler* scheduler, WorkPool* pool, RpcCounters* rpcs, store::Store* journal) {
   std::unique_ptr<MetricsEndpoint> e(new MetricsEndpoint());
-  auto collector = std::make_shared<Collector>(tables, sessions, scheduler, pool, rpcs);
+  auto collector = std::make_shared<Collector>(tables, sessions, scheduler, pool, rpcs, journal);
   try {
     // One civetweb thread: a scrape every few seconds needs no more.
     e->exposer_ = std::make_unique<prometheus::Exposer>(listen, /*num_threads=*/1);

@@ -14,6 +14,7 @@
 
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
+#include "server/store/store.h"
 
 namespace grpc::experimental {
 class ServerInterceptorFactoryInterface;
@@ -55,7 +56,8 @@ class MetricsEndpoint {
                                                                 SessionRegistry* sessions,
                                                                 TickScheduler* scheduler,
                                                                 WorkPool* pool,
-                                                                RpcCounters* rpcs);
+                                                                RpcCounters* rpcs,
+                                                                store::Store* journal = nullptr);
   ~MetricsEndpoint();
   int port() const { return port_; }
 

@@ -188,7 +188,7 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
     absl::StatusOr<std::unique_ptr<MetricsEndpoint>> metrics =
         MetricsEndpoint::Start(config.metrics_listen, app->tables_.get(), app->sessions_.get(),
                                app->scheduler_.get(), app->pool_.get(),
-                               app->rpc_counters_.get());
+                               app->rpc_counters_.get(), app->store_.get());
     if (!metrics.ok()) return metrics.status();
     app->metrics_ = *std::move(metrics);
   }

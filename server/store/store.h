@@ -12,6 +12,7 @@
 #ifndef SPORTSIM_SERVER_STORE_STORE_H_
 #define SPORTSIM_SERVER_STORE_STORE_H_
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,6 +40,14 @@ struct StoreOptions {
   absl::Duration clock_interval = absl::Milliseconds(100);
 };
 
+/// What a store has done since it opened (monotonic counters).
+struct StoreStats {
+  int64_t batches = 0;         ///< write transactions committed (each one fsync)
+  int64_t ops = 0;             ///< writes committed in them
+  int64_t failed_batches = 0;  ///< write transactions that failed (nothing of them stored)
+  int64_t clock_persists = 0;  ///< clock transactions committed
+};
+
 class Store : public Journal {
  public:
   /// Opens (creating the schema if needed) the store named by `options`: a clear
@@ -55,6 +64,8 @@ class Store : public Journal {
   /// SQLite: none.
   virtual absl::StatusOr<std::vector<StoredWorld>> Adopt() = 0;
   /// "sqlite:DIR/journal.db" or "postgresql:host:port/db node NAME" (no password), for logs.
+  /// Its counters, for /metrics.
+  virtual StoreStats stats() const = 0;
   virtual std::string Describe() const = 0;
   /// Stops the background threads after committing what is queued and persisting the clock
   /// the node reached; later writes are UNAVAILABLE. SQLite: the data directory is released.

@@ -54,6 +54,13 @@ class GroupCommitStore : public Store, public StoreInternals {
   double NodeSeconds() const override { return writer_->NodeSeconds(); }
   absl::Status Healthy() const override { return writer_->Healthy(); }
   GroupCommit& writer() override { return *writer_; }
+  StoreStats stats() const override {
+    const GroupCommitStats s = writer_->stats();
+    return StoreStats{.batches = s.batches,
+                      .ops = s.ops,
+                      .failed_batches = s.failed_batches,
+                      .clock_persists = s.clock_persists};
+  }
 
  protected:
   std::unique_ptr<GroupCommit> writer_;

@@ -9,13 +9,7 @@ StoreInternals& Internals(Store& store) { return dynamic_cast<StoreInternals&>(s
 
 }  // namespace
 
-StoreStats StatsForTesting(Store& store) {
-  const GroupCommitStats s = Internals(store).writer().stats();
-  return StoreStats{.batches = s.batches,
-                    .ops = s.ops,
-                    .failed_batches = s.failed_batches,
-                    .clock_persists = s.clock_persists};
-}
+StoreStats StatsForTesting(Store& store) { return store.stats(); }
 
 absl::Status ExecForTesting(Store& store, const std::string& sql) {
   return Internals(store).ExecForTesting(sql);

@@ -11,14 +11,7 @@
 
 namespace sportsim::server::store {
 
-struct StoreStats {
-  int64_t batches = 0;         ///< write transactions committed (each one fsync)
-  int64_t ops = 0;             ///< writes committed in them
-  int64_t failed_batches = 0;  ///< write transactions that failed (nothing of them stored)
-  int64_t clock_persists = 0;  ///< clock transactions committed
-};
-
-/// The store's counters.
+/// The store's counters (Store::stats()).
 StoreStats StatsForTesting(Store& store);
 /// Runs `sql` on the store's own connection, between two batches (SQLite:
 /// "PRAGMA max_page_count = N" to make the disk look full).

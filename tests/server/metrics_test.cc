@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
 #include <sstream>
 #include <thread>
 #include <string>
@@ -135,6 +136,35 @@ TEST(MetricsTest, OffByDefaultAndABusyPortIsAnError) {
   ASSERT_FALSE(second.ok());
   EXPECT_EQ(second.status().code(), absl::StatusCode::kUnavailable);
   EXPECT_THAT(second.status().message(), HasSubstr("metrics_listen"));
+}
+
+TEST(MetricsTest, TheJournalCountsItsCommitsAndSaysItIsUp) {
+  char dir_template[] = "/tmp/sportsim-metrics-XXXXXX";
+  ASSERT_NE(mkdtemp(dir_template), nullptr);
+  ServerConfig config{.listen = "127.0.0.1:0", .metrics_listen = "127.0.0.1:0"};
+  config.store.data_dir = dir_template;
+  {
+    absl::StatusOr<std::unique_ptr<ServerApp>> app = ServerApp::Start(config);
+    ASSERT_TRUE(app.ok()) << app.status();
+    const std::string before = Scrape((*app)->metrics_port());
+    EXPECT_EQ(Value(before, "sportsim_journal_up", {}), 1);
+    const double writes = Value(before, "sportsim_journal_writes_total", {});
+    ASSERT_GE(writes, 0);
+    absl::StatusOr<v1::CreateTableResponse> table =
+        (*app)->tables().Create(v1::CreateTableRequest());
+    ASSERT_TRUE(table.ok()) << table.status();
+    v1::SetTurnRequest turn;
+    turn.set_table_id(table->table_id());
+    turn.set_token(table->seats(0).token());
+    turn.set_seat(1);
+    ASSERT_TRUE((*app)->tables().SetTurn(turn).ok());
+    const std::string after = Scrape((*app)->metrics_port());
+    // The creation and the turn, each durable before its reply.
+    EXPECT_EQ(Value(after, "sportsim_journal_writes_total", {}), writes + 2);
+    EXPECT_GE(Value(after, "sportsim_journal_commits_total", {}), 2);
+    EXPECT_EQ(Value(after, "sportsim_journal_failed_commits_total", {}), 0);
+  }
+  std::filesystem::remove_all(dir_template);
 }
 
 }  // namespace
