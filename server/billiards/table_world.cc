@@ -382,7 +382,7 @@ void ApplyCallJudgement(TableHost& host, Table& t, games::Judgement j, b::TableS
   std::vector<EventPtr> fresh;
   ApplyJudgement(t, std::move(j), tick, t.current.shot_id, &fresh);
   host.CountEvents(fresh.size());
-  t.OfferAll(t.MakeFrame(tick, false), fresh, pump);
+  t.OfferFrameAt(tick, fresh, pump);
   host.ScheduleRest(t);
 }
 
@@ -666,8 +666,7 @@ absl::StatusOr<v1::ResetTableResponse> TableRegistry::ResetOn(Table& t, int seat
     host_.ScheduleRest(t);
   }
   host_.CountEvents(fresh.size());
-  const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
-  t.OfferAll(frame, fresh, &pump);
+  t.OfferFrameAt(tick, fresh, &pump);
   response.set_sequence(t.sequence);
   response.set_tick(tick);
   return response;
@@ -754,8 +753,7 @@ absl::StatusOr<v1::PlaceBallResponse> TableRegistry::PlaceOn(Table& t, int seat,
   e.add_balls(p.id());
   std::vector<EventPtr> fresh{t.Log(std::move(e))};
   host_.CountEvents(1);
-  const std::shared_ptr<const Frame> frame = t.MakeFrame(tick, false);
-  t.OfferAll(frame, fresh, &pump);
+  t.OfferFrameAt(tick, fresh, &pump);
   response.set_sequence(t.sequence);
   response.set_tick(tick);
   return response;
@@ -885,8 +883,7 @@ absl::StatusOr<v1::ShootResponse> TableRegistry::ShootOn(Table& t, int seat,
     fresh.push_back(t.Log(std::move(te)));
   }
   host_.CountEvents(fresh.size());
-  const std::shared_ptr<const Frame> frame = t.MakeFrame(start, false);
-  t.OfferAll(frame, fresh, &pump);
+  t.OfferFrameAt(start, fresh, &pump);
   response.set_shot_id(shot_id);
   response.set_start_tick(start);
   StrikeReportToProto(*outcome, response.mutable_strike());
@@ -933,9 +930,11 @@ absl::StatusOr<v1::SetTurnResponse> TableRegistry::SetTurnOn(Table& t, int seat,
     std::vector<EventPtr> fresh{t.Log(std::move(e))};
     host_.CountEvents(1);
     // At rest the turn goes out now; while balls move it rides with the next snapshot.
-    const std::shared_ptr<const Frame> frame =
-        t.sim == nullptr ? t.MakeFrame(tick, false) : nullptr;
-    t.OfferAll(frame, fresh, &pump);
+    if (t.sim == nullptr) {
+      t.OfferFrameAt(tick, fresh, &pump);
+    } else {
+      t.OfferAll(nullptr, fresh, &pump);
+    }
   }
   response.set_sequence(t.sequence);
   return response;

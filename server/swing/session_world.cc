@@ -521,7 +521,7 @@ absl::StatusOr<v1::StartSwingResponse> SessionRegistry::StartOn(
   v1::StartSwingResponse response;
   std::vector<SwingEventPtr> fresh;
   BeginSwing(host_, s, *std::move(live), static_cast<uint32_t>(seat), &fresh);
-  s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
+  s.OfferFrameAt(s.tick, fresh, &pump);
   host_.ScheduleNextTick(s);
   response.set_swing_id(s.swings);
   response.set_start_tick(s.tick);
@@ -568,8 +568,7 @@ absl::StatusOr<v1::ResetSwingResponse> SessionRegistry::ResetOn(
   e.set_seat(static_cast<uint32_t>(seat));
   fresh.push_back(s.Log(std::move(e)));
   host_.CountEvents(fresh.size());
-  const auto frame = s.MakeFrame(tick, false);
-  s.OfferAll(frame, fresh, &pump);
+  s.OfferFrameAt(tick, fresh, &pump);
   if (driver != nullptr) {
     s.Forget(driver.get());
     if (driver->Close(absl::OkStatus(), nullptr)) pump.push_back(driver);
@@ -669,7 +668,7 @@ absl::Status SessionRegistry::DriveStartOn(Session& s, int seat, const v1::Drive
   BeginSwing(host_, s, *std::move(live), static_cast<uint32_t>(seat), &fresh);
   s.driver = watcher;
   watcher->Due(s.tick);
-  s.OfferAll(s.MakeFrame(s.tick, false), fresh, &pump);
+  s.OfferFrameAt(s.tick, fresh, &pump);
   host_.ScheduleNextTick(s);
   drive.swing_id = s.swings;
   drive.seat = seat;

@@ -122,11 +122,10 @@ bool TokensEqual(const std::string& secret_hash, const std::string& given_hash) 
   return diff == 0;
 }
 
-int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token) {
-  const std::string hash = HashToken(token);
+int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token_hash) {
   int seat = -1;
   for (size_t i = 0; i < seats.size(); ++i) {
-    if (TokensEqual(seats[i].token_hash, hash)) seat = static_cast<int>(i);
+    if (TokensEqual(seats[i].token_hash, token_hash)) seat = static_cast<int>(i);
   }
   return seat;
 }

@@ -67,8 +67,9 @@ void SeatsToProto(const std::vector<SeatEntry>& seats, const std::vector<std::st
 /// `given_hash` equals `secret_hash`, compared in time that depends only on the secret's length.
 bool TokensEqual(const std::string& secret_hash, const std::string& given_hash);
 
-/// The seat whose token this is, or -1. Compares every seat in full (no early exit).
-int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token);
+/// The seat whose token hashes to `token_hash` (HashToken), or -1. Compares every seat in full
+/// (no early exit).
+int SeatOf(const std::vector<SeatEntry>& seats, const std::string& token_hash);
 
 /// Tick k of a world falls due at origin + k / tick_hz on the monotonic clock.
 struct TickClock {

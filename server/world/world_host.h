@@ -156,8 +156,9 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   absl::StatusOr<int> Authorize(const std::string& token) const
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     if (absl::Status gone = Gone(); !gone.ok()) return gone;
-    const bool admin = !admin_token_hash.empty() && TokensEqual(admin_token_hash, HashToken(token));
-    const int index = SeatOf(seats, token);
+    const std::string hash = HashToken(token);
+    const bool admin = !admin_token_hash.empty() && TokensEqual(admin_token_hash, hash);
+    const int index = SeatOf(seats, hash);
     if (admin) return kAdminSeat;
     if (index < 0) {
       return absl::PermissionDeniedError(absl::StrFormat("token: not a seat of this %s", Kind::kNoun));
@@ -193,6 +194,13 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
     for (const std::shared_ptr<Watcher>& w : watchers) {
       if (w->Offer(frame, fresh)) pump->push_back(w);
     }
+  }
+  /// A call's change: the frame of tick k (built only when someone reads) and the events to
+  /// every reader.
+  void OfferFrameAt(int64_t k, const std::vector<EventPtr>& fresh, Pump* pump,
+                    bool ticked = false) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
+    if (watchers.empty()) return;
+    OfferAll(MakeFrame(k, false, ticked), fresh, pump);
   }
   void Forget(const Watcher* w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
     watchers.erase(std::remove_if(watchers.begin(), watchers.end(),
@@ -315,20 +323,8 @@ class WorldHost {
       ++w.journal_index;
       return absl::OkStatus();
     }
-    JournalEntry entry{.world_id = w.id,
-                       .kind = std::string(Kind::kNoun),
-                       .index = w.journal_index + 1,
-                       .tick = tick,
-                       .seat = seat,
-                       .type = type,
-                       .body = std::move(body),
-                       .anchor_s = journal_->NodeSeconds()};
     w.pinned_tick = tick;
-    w.committing = true;
-    w.mu.Unlock();
-    absl::Status durable = journal_->Append(std::move(entry));
-    w.mu.Lock();
-    w.committing = false;
+    absl::Status durable = WaitDurable(w, seat, type, std::move(body), /*remove=*/false);
     if (!durable.ok()) {
       w.pinned_tick.reset();
       return durable;
@@ -449,24 +445,12 @@ class WorldHost {
       if (!seat.ok()) return seat.status();
       if (absl::Status s = may_delete(*world, *seat); !s.ok()) return s;
       if (journal_ != nullptr) {
-        JournalEntry entry{.world_id = world->id,
-                           .kind = std::string(Kind::kNoun),
-                           .index = world->journal_index + 1,
-                           .tick = world->NowTick(),
-                           .seat = *seat,
-                           .type = type,
-                           .body = std::move(body),
-                           .anchor_s = journal_->NodeSeconds()};
-        world->committing = true;
-        world->mu.Unlock();
-        absl::Status durable = journal_->Remove(std::move(entry));
-        world->mu.Lock();
-        world->committing = false;
-        if (!durable.ok()) {
-          AfterCall(*world);
-          return durable;
-        }
+        absl::Status durable = WaitDurable(*world, *seat, type, std::move(body), /*remove=*/true);
+        AfterCall(*world);
+        if (!durable.ok()) return durable;
       }
+      // From here every other call finds the world gone (a second delete too).
+      world->deleted = true;
     }
     {
       absl::MutexLock lock(&mu_);
@@ -475,7 +459,6 @@ class WorldHost {
     Pump pump;
     {
       absl::MutexLock lock(&world->mu);
-      world->deleted = true;
       std::vector<EventPtr> fresh;
       on_delete(*world, &fresh, &pump);
       const std::shared_ptr<const Frame> last = world->MakeFrame(world->NowTick(), false);
@@ -853,6 +836,28 @@ class WorldHost {
   }
 
   // Stage 1: a wake for a world deleted, closed or scheduled again since is dropped.
+  // The next journal entry of `w` at its tick now, made durable (`remove`: the world's deletion,
+  // after which it leaves the store) with the world frozen: its lock is released only for the
+  // wait, with `committing` set, so that no tick and no other call acts meanwhile.
+  absl::Status WaitDurable(WorldT& w, int seat, uint32_t type, std::string body, bool remove)
+      ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    JournalEntry entry{.world_id = w.id,
+                       .kind = std::string(Kind::kNoun),
+                       .index = w.journal_index + 1,
+                       .tick = w.NowTick(),
+                       .seat = seat,
+                       .type = type,
+                       .body = std::move(body),
+                       .anchor_s = journal_->NodeSeconds()};
+    w.committing = true;
+    w.mu.Unlock();
+    absl::Status durable =
+        remove ? journal_->Remove(std::move(entry)) : journal_->Append(std::move(entry));
+    w.mu.Lock();
+    w.committing = false;
+    return durable;
+  }
+
   static bool Superseded(const WorldT& w, uint64_t generation) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     return w.deleted || w.closed || w.restoring || generation != w.wake_generation;
   }
@@ -877,7 +882,7 @@ class WorldHost {
     std::vector<EventPtr> fresh;
     Kind::AtRestDeadline(*this, w, &fresh);
     CountEvents(fresh.size());
-    w.OfferAll(w.MakeFrame(w.tick, false, true), fresh, pump);
+    w.OfferFrameAt(w.tick, fresh, pump, /*ticked=*/true);
   }
 
   // Stage 2b (at rest): a heartbeat for the readers.
