@@ -4,6 +4,10 @@
 // (a stop after the last shot's strike, before it ends), starts it again on the same journal and
 // reports: the restore's wall time (every table recreated, its commands replayed, its shot
 // advanced to the tick it had reached), tables restored, and journal bytes per shot.
+//
+// With --sessions, as many swing sessions each swing `--swings` times (the chapter's swing, the
+// last one in flight at the stop) before the restart: the restore then replays each session's
+// swings since its latest checkpoint, or since its creation with --nosession_checkpoints.
 #include <sys/stat.h>
 
 #include <chrono>
@@ -23,7 +27,12 @@
 ABSL_FLAG(int, tables, 1000, "Tables, each mid-shot at the restart");
 ABSL_FLAG(int, shots, 4, "Shots per table before the restart (the last one in flight)");
 ABSL_FLAG(std::string, store, "", "postgresql://... (empty: SQLite in a temporary directory)");
-ABSL_FLAG(double, clock_rate, 50, "Table time per wall time while the shots before the last play");
+ABSL_FLAG(int, sessions, 0, "Swing sessions, each mid-swing at the restart");
+ABSL_FLAG(int, swings, 200, "Swings per session before the restart (the last one in flight)");
+ABSL_FLAG(bool, session_checkpoints, true,
+          "Sessions write their checkpoints (false: a restore replays every swing)");
+ABSL_FLAG(double, clock_rate, 50,
+          "World time per wall time while the shots and swings before the last play");
 
 namespace sportsim {
 namespace {
@@ -40,19 +49,52 @@ int64_t DirBytes(const fs::path& dir) {
   return total;
 }
 
+// Swing `swing` (from 0) of every session; all but the last are waited for.
+bool SwingAll(server::SessionRegistry& registry,
+              const std::vector<std::pair<std::string, std::string>>& sessions, int swing,
+              bool last) {
+  for (const auto& [id, token] : sessions) {
+    v1::StartSwingRequest start;  // the chapter's torques
+    start.set_session_id(id);
+    start.set_token(token);
+    absl::StatusOr<v1::StartSwingResponse> r = registry.Start(start);
+    if (!r.ok()) {
+      std::fprintf(stderr, "swing %d: %s\n", swing, std::string(r.status().message()).c_str());
+      return false;
+    }
+  }
+  if (last) return true;
+  for (const auto& [id, token] : sessions) {
+    v1::GetSessionRequest get;
+    get.set_session_id(id);
+    for (;;) {
+      absl::StatusOr<v1::SessionInfo> info = registry.Get(get);
+      if (!info.ok()) return false;
+      if (info->phase() == v1::SWING_PHASE_FINISHED) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+  return true;
+}
+
 int Run() {
   const int n = absl::GetFlag(FLAGS_tables);
   const int shots = std::max(1, absl::GetFlag(FLAGS_shots));
+  const int m = absl::GetFlag(FLAGS_sessions);
+  const int swings = std::max(1, absl::GetFlag(FLAGS_swings));
   const fs::path dir = fs::temp_directory_path() /
                        absl::StrFormat("sportsim-restore-%d", static_cast<int>(getpid()));
   ServerConfig config;
   config.listen = "127.0.0.1:0";
   config.tables.world.max_worlds = n + 1;
   config.tables.world.clock_rate = absl::GetFlag(FLAGS_clock_rate);
+  config.sessions.world.max_worlds = m + 1;
+  config.sessions.world.clock_rate = absl::GetFlag(FLAGS_clock_rate);
+  if (!absl::GetFlag(FLAGS_session_checkpoints)) config.sessions.checkpoint_every_swings = 0;
   config.store.data_dir = dir.string();
   config.store.postgres_uri = absl::GetFlag(FLAGS_store);
   config.store.node = "restore-bench";
-  std::vector<std::pair<std::string, std::string>> tables;
+  std::vector<std::pair<std::string, std::string>> tables, sessions;
   {
     absl::StatusOr<std::unique_ptr<ServerApp>> app = ServerApp::Start(config);
     if (!app.ok()) {
@@ -85,12 +127,26 @@ int Run() {
         }
       }
     }
-    // Every table is mid-shot now: its last shot was just struck.
+    server::SessionRegistry& swing_registry = (*app)->sessions();
+    for (int i = 0; i < m; ++i) {
+      absl::StatusOr<v1::CreateSessionResponse> c =
+          swing_registry.Create(v1::CreateSessionRequest());
+      if (!c.ok()) return 1;
+      sessions.emplace_back(c->session_id(), c->token());
+    }
+    for (int s = 0; m > 0 && s < swings; ++s) {
+      if (!SwingAll(swing_registry, sessions, s, s == swings - 1)) return 1;
+    }
+    // Every table is mid-shot now, every session mid-swing: the last was just started.
     (*app)->Shutdown(absl::ZeroDuration());
   }
   const int64_t bytes = config.store.postgres_uri.empty() ? DirBytes(dir) : 0;
   config.tables.world.clock_rate = 1.0;
+  config.sessions.world.clock_rate = 1.0;
+  const auto restart = std::chrono::steady_clock::now();
   absl::StatusOr<std::unique_ptr<ServerApp>> again = ServerApp::Start(config);
+  const double restart_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - restart).count();
   if (!again.ok()) {
     std::fprintf(stderr, "%s\n", std::string(again.status().message()).c_str());
     return 1;
@@ -103,13 +159,38 @@ int Run() {
     absl::StatusOr<v1::TableInfo> info = (*again)->tables().Get(get);
     if (info.ok() && !info->at_rest()) ++moving;
   }
-  std::printf("tables %d, shots per table %d, store %s\n", n, shots,
-              (*again)->journal()->Describe().c_str());
-  std::printf("restored %d tables (%d failed) in %.3f s wall; %d still mid-shot after it\n",
-              r.tables, r.failed, r.seconds, moving);
-  if (bytes > 0) {
+  int swinging = 0;
+  for (const auto& [id, token] : sessions) {
+    v1::GetSessionRequest get;
+    get.set_session_id(id);
+    absl::StatusOr<v1::SessionInfo> info = (*again)->sessions().Get(get);
+    if (info.ok() && info->phase() == v1::SWING_PHASE_SWINGING) ++swinging;
+  }
+  if (n > 0) {
+    std::printf("tables %d, shots per table %d, store %s\n", n, shots,
+                (*again)->journal()->Describe().c_str());
+    std::printf("restored %d tables (%d failed) in %.3f s wall; %d still mid-shot after it\n",
+                r.tables, r.failed, r.seconds, moving);
+  }
+  if (m > 0) {
+    const std::string every =
+        absl::GetFlag(FLAGS_session_checkpoints)
+            ? absl::StrFormat("every %d swings", config.sessions.checkpoint_every_swings)
+            : "off";
+    std::printf("sessions %d, swings per session %d, checkpoints %s, store %s\n", m, swings,
+                every.c_str(), (*again)->journal()->Describe().c_str());
+    std::printf("restored %d sessions (%d failed) in %.2f ms wall%s; %d still mid-swing after it\n",
+                r.sessions, r.failed, r.seconds * 1e3, n > 0 ? " (tables included)" : "",
+                swinging);
+  }
+  std::printf("restart %.2f ms wall (the store's load included)\n", restart_s * 1e3);
+  if (bytes > 0 && m == 0) {
     std::printf("journal %.1f kB on disk: %.0f bytes per shot (SQLite file sizes, WAL included)\n",
                 bytes / 1e3, static_cast<double>(bytes) / (static_cast<double>(n) * shots));
+  } else if (bytes > 0 && n == 0) {
+    std::printf(
+        "journal %.1f kB on disk: %.0f bytes per swing (SQLite file sizes, WAL included)\n",
+        bytes / 1e3, static_cast<double>(bytes) / (static_cast<double>(m) * swings));
   }
   again->reset();
   std::error_code ignored;

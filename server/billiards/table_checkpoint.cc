@@ -1,18 +1,11 @@
 #include "server/billiards/table_checkpoint.h"
 
 #include <array>
-#include <bit>
-#include <climits>
 #include <optional>
-#include <type_traits>
 #include <vector>
 
-#include "absl/strings/escaping.h"
-#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
-#include "google/protobuf/descriptor.h"
-#include "google/protobuf/message.h"
-#include "google/protobuf/unknown_field_set.h"
+#include "server/world/checkpoint_codec.h"
 #include "sportsim/store/v1/table_state.pb.h"
 
 namespace sportsim::server {
@@ -25,75 +18,19 @@ namespace {
 
 // ---------------------------------------------------------------------------------------------
 // Errors. Every message starts with "table checkpoint: " and names the field by its path in
-// TableRestState ("record[3].applied.v").
+// TableRestState ("record[3].applied.v"); the framing is checkpoint_codec.h's.
+
+using checkpoint::Differ;
+using checkpoint::Index;
+using checkpoint::Member;
 
 constexpr std::string_view kWhat = "table checkpoint: ";
 
 absl::Status Corrupt(std::string_view path, std::string_view what) {
-  return absl::DataLossError(absl::StrFormat("%s%s: %s", kWhat, path, what));
+  return checkpoint::Corrupt(kWhat, path, what);
 }
 
 absl::Status Missing(std::string_view path) { return Corrupt(path, "missing"); }
-
-std::string Index(std::string_view path, size_t i) { return absl::StrFormat("%s[%d]", path, i); }
-
-std::string Member(std::string_view path, std::string_view name) {
-  return path.empty() ? std::string(name) : absl::StrFormat("%s.%s", path, name);
-}
-
-// Refuses a field number this version does not know, in `m` or in any message under it: a
-// version 1 reader must not drop what a writer stored (a new field bumps the version).
-absl::Status CheckNoUnknownFields(const google::protobuf::Message& m, const std::string& path) {
-  const google::protobuf::Reflection* r = m.GetReflection();
-  const google::protobuf::UnknownFieldSet& unknown = r->GetUnknownFields(m);
-  if (!unknown.empty()) {
-    return Corrupt(path.empty() ? "(top)" : path,
-                   absl::StrFormat("unknown field %d (a newer writer, or damaged bytes)",
-                                   unknown.field(0).number()));
-  }
-  std::vector<const google::protobuf::FieldDescriptor*> fields;
-  r->ListFields(m, &fields);
-  for (const google::protobuf::FieldDescriptor* f : fields) {
-    if (f->cpp_type() != google::protobuf::FieldDescriptor::CPPTYPE_MESSAGE) continue;
-    const std::string sub = Member(path, f->name());
-    if (f->is_repeated()) {
-      for (int i = 0; i < r->FieldSize(m, f); ++i) {
-        if (absl::Status s = CheckNoUnknownFields(r->GetRepeatedMessage(m, f, i),
-                                                  Index(sub, static_cast<size_t>(i)));
-            !s.ok()) {
-          return s;
-        }
-      }
-    } else if (absl::Status s = CheckNoUnknownFields(r->GetMessage(m, f), sub); !s.ok()) {
-      return s;
-    }
-  }
-  return absl::OkStatus();
-}
-
-// ---------------------------------------------------------------------------------------------
-// The trailer: field 15 (fixed32, tag 0x7d) holding the CRC-32C of every byte before it.
-
-constexpr char kCrcTag = static_cast<char>((15 << 3) | 5);
-constexpr size_t kTrailerBytes = 5;
-
-constexpr std::array<uint32_t, 256> MakeCrcTable() {
-  std::array<uint32_t, 256> table{};
-  for (uint32_t i = 0; i < 256; ++i) {
-    uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1) != 0 ? (c >> 1) ^ 0x82F63B78u : c >> 1;
-    table[i] = c;
-  }
-  return table;
-}
-constexpr std::array<uint32_t, 256> kCrcTable = MakeCrcTable();
-
-/// CRC-32C (Castagnoli; iSCSI, RFC 3720): "123456789" gives 0xe3069283.
-uint32_t Crc32c(std::string_view bytes) {
-  uint32_t c = 0xFFFFFFFFu;
-  for (char ch : bytes) c = kCrcTable[(c ^ static_cast<uint8_t>(ch)) & 0xFF] ^ (c >> 8);
-  return c ^ 0xFFFFFFFFu;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Enums: the stored numbers are table_state.proto's, mapped value by value (no default case,
@@ -581,89 +518,18 @@ absl::Status MatchEntryFromProto(const st::MatchEntry& in, std::string_view path
 // ---------------------------------------------------------------------------------------------
 // Comparison: the first difference, by field path.
 
-std::string Show(double v) {
-  return absl::StrFormat("%.17g (bits %016x)", v, std::bit_cast<uint64_t>(v));
+// A vector's three components by their bits.
+void Bits(Differ& d, const std::string& path, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  d.Bits(Member(path, "x"), a.x(), b.x());
+  d.Bits(Member(path, "y"), a.y(), b.y());
+  d.Bits(Member(path, "z"), a.z(), b.z());
 }
-
-std::string Show(const std::string& s) {
-  constexpr size_t kMax = 48;
-  return absl::StrCat("\"", absl::CEscape(s.substr(0, kMax)), s.size() > kMax ? "\"..." : "\"",
-                      absl::StrFormat(" (%d bytes)", s.size()));
-}
-
-template <typename T>
-  requires std::is_integral_v<T>
-std::string Show(T v) {
-  if constexpr (std::is_same_v<T, bool>) {
-    return v ? "true" : "false";
-  } else {
-    return absl::StrCat(v);
-  }
-}
-
-class Differ {
- public:
-  const std::string& first() const { return first_; }
-  bool found() const { return !first_.empty(); }
-
-  void Bits(const std::string& path, double a, double b) {
-    if (!found() && std::bit_cast<uint64_t>(a) != std::bit_cast<uint64_t>(b)) {
-      first_ = absl::StrCat(path, ": ", Show(a), " vs ", Show(b));
-    }
-  }
-  template <typename T>
-    requires std::is_integral_v<T>
-  void Same(const std::string& path, T a, T b) {
-    if (!found() && a != b) first_ = absl::StrCat(path, ": ", Show(a), " vs ", Show(b));
-  }
-  template <typename E>
-    requires std::is_enum_v<E>
-  void Same(const std::string& path, E a, E b) {
-    Same(path, static_cast<int>(a), static_cast<int>(b));
-  }
-  void Same(const std::string& path, const std::string& a, const std::string& b) {
-    if (!found() && a != b) first_ = absl::StrCat(path, ": ", Show(a), " vs ", Show(b));
-  }
-  void Same(const std::string& path, const std::vector<std::string>& a,
-            const std::vector<std::string>& b) {
-    if (Size(path, a.size(), b.size())) {
-      for (size_t i = 0; i < a.size(); ++i) Same(Index(path, i), a[i], b[i]);
-    }
-  }
-  template <typename T>
-  void Same(const std::string& path, const std::array<T, 2>& a, const std::array<T, 2>& b) {
-    for (size_t i = 0; i < 2; ++i) Same(Index(path, i), a[i], b[i]);
-  }
-  void Bits(const std::string& path, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    Bits(Member(path, "x"), a.x(), b.x());
-    Bits(Member(path, "y"), a.y(), b.y());
-    Bits(Member(path, "z"), a.z(), b.z());
-  }
-  /// False (and the difference noted) when the sizes differ.
-  bool Size(const std::string& path, size_t a, size_t b) {
-    if (!found() && a != b) {
-      first_ = absl::StrFormat("%s: %d vs %d elements", path, a, b);
-    }
-    return !found();
-  }
-  /// False (and the difference noted) when one has a value and the other not.
-  template <typename T>
-  bool Presence(const std::string& path, const std::optional<T>& a, const std::optional<T>& b) {
-    if (!found() && a.has_value() != b.has_value()) {
-      first_ = absl::StrCat(path, a.has_value() ? ": present vs absent" : ": absent vs present");
-    }
-    return !found() && a.has_value();
-  }
-
- private:
-  std::string first_;
-};
 
 void DiffBall(Differ& d, const std::string& p, const b::Ball& a, const b::Ball& b) {
   d.Same(Member(p, "id"), a.id, b.id);
-  d.Bits(Member(p, "r"), a.r, b.r);
-  d.Bits(Member(p, "v"), a.v, b.v);
-  d.Bits(Member(p, "w"), a.w, b.w);
+  Bits(d, Member(p, "r"), a.r, b.r);
+  Bits(d, Member(p, "v"), a.v, b.v);
+  Bits(d, Member(p, "w"), a.w, b.w);
   d.Bits(Member(p, "q.w"), a.q.w(), b.q.w());
   d.Bits(Member(p, "q.x"), a.q.x(), b.q.x());
   d.Bits(Member(p, "q.y"), a.q.y(), b.q.y());
@@ -749,8 +615,8 @@ void DiffOutcome(Differ& d, const std::string& p, const b::StrikeOutcome& a,
   d.Same(Member(s, "seed"), a.applied.seed, b.applied.seed);
   d.Bits(Member(p, "cue_speed_mps"), a.cue_speed_mps, b.cue_speed_mps);
   d.Bits(Member(p, "squirt_rad"), a.squirt_rad, b.squirt_rad);
-  d.Bits(Member(p, "v"), a.v, b.v);
-  d.Bits(Member(p, "w"), a.w, b.w);
+  Bits(d, Member(p, "v"), a.v, b.v);
+  Bits(d, Member(p, "w"), a.w, b.w);
 }
 
 void DiffSummary(Differ& d, const std::string& p, const ShotSummary& a, const ShotSummary& b) {
@@ -802,46 +668,14 @@ std::string EncodeTableRestState(const TableRestState& state) {
   out.set_placed(state.placed);
   if (state.clock_deadline.has_value()) out.set_clock_deadline(*state.clock_deadline);
   for (const MatchEntry& e : state.record) MatchEntryToProto(e, out.add_record());
-  std::string bytes = out.SerializeAsString();
-  const uint32_t crc = Crc32c(bytes);
-  bytes.push_back(kCrcTag);
-  for (int shift = 0; shift < 32; shift += 8) bytes.push_back(static_cast<char>(crc >> shift));
-  return bytes;
+  return checkpoint::Seal(out);
 }
 
 absl::StatusOr<TableRestState> DecodeTableRestState(std::string_view bytes) {
-  if (bytes.size() > static_cast<size_t>(INT_MAX)) {
-    return absl::DataLossError(
-        absl::StrFormat("%s%d bytes, more than a message can hold", kWhat, bytes.size()));
-  }
-  if (bytes.size() < kTrailerBytes || bytes[bytes.size() - kTrailerBytes] != kCrcTag) {
-    return absl::DataLossError(absl::StrFormat(
-        "%s%d bytes that do not end with the crc32c field: not a checkpoint, or cut short",
-        kWhat, bytes.size()));
-  }
-  const std::string_view body = bytes.substr(0, bytes.size() - kTrailerBytes);
-  uint32_t stored = 0;
-  for (size_t i = 0; i < 4; ++i) {
-    stored |= static_cast<uint32_t>(static_cast<uint8_t>(bytes[body.size() + 1 + i])) << (8 * i);
-  }
-  if (const uint32_t crc = Crc32c(body); crc != stored) {
-    return absl::DataLossError(absl::StrFormat(
-        "%scrc32c %08x, but the %d bytes before it give %08x: damaged or cut short", kWhat,
-        stored, body.size(), crc));
-  }
   st::TableRestState in;
-  if (!in.ParseFromArray(body.data(), static_cast<int>(body.size()))) {
-    return absl::DataLossError(absl::StrFormat(
-        "%sthe %d bytes are not a sportsim.store.v1.TableRestState message", kWhat,
-        bytes.size()));
+  if (absl::Status s = checkpoint::Open(bytes, kWhat, kTableCheckpointVersion, &in); !s.ok()) {
+    return s;
   }
-  if (in.crc32c() != 0) return Corrupt("crc32c", "found before the end");
-  if (in.version() != kTableCheckpointVersion) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "%sversion %d, but this server reads only version %d (%d bytes)", kWhat, in.version(),
-        kTableCheckpointVersion, bytes.size()));
-  }
-  if (absl::Status s = CheckNoUnknownFields(in, ""); !s.ok()) return s;
   TableRestState out;
   out.tick = in.tick();
   out.sequence = in.sequence();

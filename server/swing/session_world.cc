@@ -8,6 +8,7 @@
 #include "absl/strings/str_format.h"
 #include "server/world/event_log.h"
 #include "server/swing/convert.h"
+#include "server/swing/session_checkpoint.h"
 #include "server/world/watcher_impl.h"
 #include "sportsim/store/v1/journal.pb.h"
 #include "server/world/world.h"
@@ -133,6 +134,61 @@ std::shared_ptr<SwingWatcher> EndSwing(SessionHost& host, Session& s, const sw::
   return std::move(s.driver);
 }
 
+// At rest after a swing's end (no swing in flight, no driver attached): the session as a
+// checkpoint covering its journal so far, every checkpoint_every_swings swings. Not while it is
+// replayed: its checkpoint is in the store already, or will be at its next live swing's end.
+void Checkpoint(SessionHost& host, Session& s) ABSL_EXCLUSIVE_LOCKS_REQUIRED(s.mu) {
+  Journal* journal = host.journal();
+  if (journal == nullptr || s.restoring || s.live != nullptr || s.driver != nullptr ||
+      s.checkpoint_every_swings == 0 || s.swings % s.checkpoint_every_swings != 0) {
+    return;
+  }
+  const SessionRestState state{.tick = s.tick,
+                               .sequence = s.sequence,
+                               .params = s.params,
+                               .phase = s.phase,
+                               .swings = s.swings,
+                               .start_tick = s.start_tick,
+                               .seat = s.seat,
+                               .state = s.state,
+                               .qalpha = s.qalpha,
+                               .qbeta = s.qbeta,
+                               .last_impact = s.last_impact,
+                               .last_end_reason = s.last_end_reason};
+  journal->Checkpoint(s.id, s.journal_index, s.tick, EncodeSessionRestState(state));
+}
+
+// A restore from a checkpoint: the session at rest as it was, its golfer made again from the
+// parameters (as MakeSession and ResetOn make it).
+absl::Status LoadCheckpoint(Session& s, const std::string& bytes)
+    ABSL_EXCLUSIVE_LOCKS_REQUIRED(s.mu) {
+  absl::StatusOr<SessionRestState> state = DecodeSessionRestState(bytes);
+  if (!state.ok()) return state.status();
+  if (state->phase == SessionPhase::kSwinging) {
+    return absl::DataLossError(
+        "session checkpoint: phase: swinging, but a checkpoint is taken at rest");
+  }
+  absl::StatusOr<sw::SwingModel> model = SwingModelFromProto(state->params, s.disabled_effects);
+  if (!model.ok()) {
+    return absl::DataLossError(
+        absl::StrFormat("session checkpoint: params: %s", model.status().message()));
+  }
+  s.tick = state->tick;
+  s.sequence = state->sequence;
+  s.params = std::move(state->params);
+  s.model = std::make_shared<const sw::SwingModel>(*std::move(model));
+  s.phase = state->phase;
+  s.swings = state->swings;
+  s.start_tick = state->start_tick;
+  s.seat = state->seat;
+  s.state = state->state;
+  s.qalpha = state->qalpha;
+  s.qbeta = state->qbeta;
+  s.last_impact = state->last_impact;
+  s.last_end_reason = std::move(state->last_end_reason);
+  return absl::OkStatus();
+}
+
 }  // namespace
 
 bool SessionKind::Running(const Session& s) ABSL_NO_THREAD_SAFETY_ANALYSIS {
@@ -213,6 +269,7 @@ void SessionKind::EndRun(SessionHost& host, Session& s, const End& end,
     driver->Offer(s.MakeFrame(s.tick, false, true), *fresh);
     if (driver->Close(absl::OkStatus(), nullptr)) pump->push_back(driver);
   }
+  Checkpoint(host, s);
 }
 
 std::shared_ptr<const SwingFrame> SessionKind::MakeFrame(const Session& s, int64_t k,
@@ -301,6 +358,7 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::MakeSession(
 
   Session* const session = &made;
   session->counters = &counters_;
+  session->checkpoint_every_swings = limits_.checkpoint_every_swings;
   session->strike = std::move(strike);
   session->tick_hz = tick_hz;
   session->period_s = 1.0 / tick_hz;
@@ -851,8 +909,8 @@ absl::Status SessionRegistry::Restore(const StoredWorld& stored) {
         std::vector<std::string> unused;
         return MakeSession(request, s, &unused).status();
       },
-      [&](Session&, const std::string&) -> absl::Status {
-        return absl::DataLossError("a session has no checkpoints");
+      [&](Session& s, const std::string& checkpoint) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+        return LoadCheckpoint(s, checkpoint);
       },
       [&](Session& s, const JournalEntry& e, Session::Pump& pump)
           ABSL_NO_THREAD_SAFETY_ANALYSIS -> absl::Status {

@@ -45,6 +45,7 @@
 #include "sim/games/game.h"
 #include "sportsim/store/v1/table_state.pb.h"
 #include "sportsim/v1/billiards.pb.h"
+#include "tests/server/field_count.h"
 
 namespace sportsim::server {
 namespace {
@@ -59,20 +60,6 @@ using ::testing::HasSubstr;
 // Field counts: a new field in a stored type must be added to table_state.proto,
 // table_checkpoint.cc (encode, decode, compare) and the adversarial test below, and the
 // version bumped; then update its count here.
-
-struct AnyField {
-  template <typename T>
-  operator T() const;  // NOLINT: converts to any field's type (never called)
-};
-
-template <typename T, typename... A>
-constexpr size_t CountFields() {
-  if constexpr (requires { T{A{}..., AnyField{}}; }) {
-    return CountFields<T, A..., AnyField>();
-  } else {
-    return sizeof...(A);
-  }
-}
 
 static_assert(CountFields<b::Ball>() == 7, "billiards::Ball changed: update the checkpoint");
 static_assert(CountFields<b::TableState>() == 2, "TableState changed: update the checkpoint");
