@@ -128,8 +128,11 @@ BENCHMARK(BM_RandomShots)
 void BM_RackShots(benchmark::State& state) {
   const TableModel m = *TableModel::Create(*MakeTablePreset("pool-9ft"));
   const std::vector<TableState> batch = StormBatch(m, 1000, 2026);
-  const SolverOptions o = StormOptions(state.range(0) == 1);
-  state.SetLabel(state.range(0) == 1 ? "hops (before)" : "sustained contacts");
+  // Arg: bit 0 the legacy hops (before), bit 1 orientation off (a bot's summary needs none).
+  SolverOptions o = StormOptions((state.range(0) & 1) != 0);
+  if ((state.range(0) & 2) != 0) o.effects |= kEffectDisableOrientation;
+  state.SetLabel(std::string((state.range(0) & 1) != 0 ? "hops (before)" : "sustained contacts") +
+                 ((state.range(0) & 2) != 0 ? ", orientation off" : ""));
   std::vector<double> handled(batch.size());
   double reported = 0.0, reported_max = 0.0;
   for (auto _ : state) {
@@ -157,7 +160,7 @@ void BM_RackShots(benchmark::State& state) {
   state.counters["reported_max"] = reported_max;
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(batch.size()));
 }
-BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sportsim::billiards

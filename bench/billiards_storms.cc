@@ -6,7 +6,8 @@
 // and what the engine handled by kind; --trace dumps the worst shot's reported events.
 //   billiards_storms [--shots N] [--seed S] [--repeat K] [--legacy] [--no-orientation]
 //                    [--trace] [--only I]
-// --legacy: RestingContacts::kHops (the treatment before 2026-12); --only I: run shot I once;
+// --legacy: RestingContacts::kHops (the treatment before 2026-12); --only I: run shot I once
+// (with --trace: print its events);
 // STORM_DUMP=1: per-shot "index handled reported cpu_us" lines on stderr.
 #include <algorithm>
 #include <cstdio>
@@ -38,6 +39,16 @@ double Quantile(std::vector<double> v, double q) {
   return v[k];
 }
 
+void PrintEvents(const std::vector<Event>& events) {
+  for (const Event& e : events) {
+    std::printf("%.9f %-13s %2d %2d %2d %s->%s va(%.3g,%.3g) vb(%.3g,%.3g)\n", e.t_s,
+                std::string(EventKindName(e.kind)).c_str(), e.a, e.b, e.other,
+                std::string(MotionStateName(e.from)).c_str(),
+                std::string(MotionStateName(e.to)).c_str(), e.va.x(), e.va.y(), e.vb.x(),
+                e.vb.y());
+  }
+}
+
 int Main(int argc, char** argv) {
   int shots = 1000, repeat = 3;
   uint64_t seed = 2026;
@@ -61,6 +72,7 @@ int Main(int argc, char** argv) {
     absl::StatusOr<ShotResult> r = SimulateShot(m, o, batch[only], {});
     std::printf("shot %d: %s, %zu events reported\n", only, r.ok() ? "ok" : r.status().ToString().c_str(),
                 r.ok() ? r->events.size() : 0);
+    if (trace && r.ok()) PrintEvents(r->events);
     return 0;
   }
   std::vector<ShotStats> stats(batch.size());
@@ -101,6 +113,8 @@ int Main(int argc, char** argv) {
     sum.state_changes += s.counts.state_changes;
     sum.predictions += s.counts.predictions;
     sum.sustained_contacts += s.counts.sustained_contacts;
+    sum.sustained_sweeps += s.counts.sustained_sweeps;
+    sum.group_balls += s.counts.group_balls;
   }
   std::vector<ShotStats> by_events = stats;
   std::sort(by_events.begin(), by_events.end(),
@@ -121,11 +135,12 @@ int Main(int argc, char** argv) {
   std::printf("top 1%% of shots by events: %.1f %% of the batch CPU\n", 100.0 * top_cpu / total_cpu);
   std::printf("handled (batch): ball-ball %lld (plastic %lld, pushes %lld), cushion %lld "
               "(plastic/push %lld), pocket %lld, transitions %lld, contact-caused state changes "
-              "%lld, sustained contacts %lld, predictions %lld\n",
+              "%lld, sustained contacts %lld (sweeps %lld, group balls %lld), predictions %lld\n",
               (long long)sum.ball_ball, (long long)sum.ball_ball_plastic,
               (long long)sum.ball_ball_push, (long long)sum.cushion, (long long)sum.cushion_plastic,
               (long long)sum.pocket, (long long)sum.transition, (long long)sum.state_changes,
-              (long long)sum.sustained_contacts, (long long)sum.predictions);
+              (long long)sum.sustained_contacts, (long long)sum.sustained_sweeps,
+              (long long)sum.group_balls, (long long)sum.predictions);
   if (std::getenv("STORM_DUMP") != nullptr) {
     for (const ShotStats& st : stats) {
       std::fprintf(stderr, "%d %lld %lld %.2f\n", st.index, (long long)st.handled, (long long)st.reported, 1e6 * st.cpu_s);
@@ -145,13 +160,7 @@ int Main(int argc, char** argv) {
   if (trace) {
     const TableState& s = batch[by_events[0].index];
     absl::StatusOr<ShotResult> r = SimulateShot(m, o, s, {});
-    for (const Event& e : r->events) {
-      std::printf("%.9f %-13s %2d %2d %2d %s->%s va(%.3g,%.3g) vb(%.3g,%.3g)\n", e.t_s,
-                  std::string(EventKindName(e.kind)).c_str(), e.a, e.b, e.other,
-                  std::string(MotionStateName(e.from)).c_str(),
-                  std::string(MotionStateName(e.to)).c_str(), e.va.x(), e.va.y(), e.vb.x(),
-                  e.vb.y());
-    }
+    if (r.ok()) PrintEvents(r->events);
   }
   return 0;
 }

@@ -76,6 +76,9 @@ struct Trajectory {
   MotionState state = MotionState::kStationary;
   double t_next = kNever;  // the next transition (absolute time)
   TransitionKind next_kind = TransitionKind::kNone;
+  // Where the path goes from its origin to min(t_next, t0 + kPredictionHorizon): the pairs'
+  // broad phase (a ball at rest: its position).
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();
   uint32_t version = 0;
   bool fixed_axis = true;  // the spin axis does not turn: orientation in closed form
   // Orientation at t0 + q_k * q_piece (a cache of a pure function of the segment).
@@ -156,6 +159,8 @@ class EventSimulation final : public TableSimulation {
         half_(0.5 * model.spec().length_m + model.radius(),
               0.5 * model.spec().width_m + model.radius()) {
     resting_.resize(state_.balls.size());
+    memo_.resize(state_.balls.size() * state_.balls.size());
+    slot_of_.assign(state_.balls.size(), -1);
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
     for (int i = 0; i < n_; ++i) Predict(i);
   }
@@ -251,7 +256,21 @@ class EventSimulation final : public TableSimulation {
     }
     tr.q_k = 0;
     tr.q_cached = tr.q0;
+    tr.lo = tr.hi = tr.r0;
+    if (IsTranslating(tr.state)) {
+      const Box box = PathBox(tr.r0, tr.v0, tr.a, std::min(tr.t_next, t + kPredictionHorizon) - t);
+      tr.lo = box.lo;
+      tr.hi = box.hi;
+    }
     ++tr.version;
+  }
+
+  // Moves ball i's path (just started by SetOrigin) by `by`: a resting gap opened.
+  void MoveOrigin(int i, const Eigen::Vector2d& by) {
+    Trajectory& tr = traj_[i];
+    tr.r0 += by;
+    tr.lo += by;
+    tr.hi += by;
   }
 
   Eigen::Vector2d PosAt(int i, double t) const {
@@ -329,6 +348,9 @@ class EventSimulation final : public TableSimulation {
     p.vb = traj_[p.b].version;
     if (!IsTranslating(ti.state) && !IsTranslating(tj.state)) return p;
     if (ti.state == MotionState::kPocketed || tj.state == MotionState::kPocketed) return p;
+    // Broad phase: i's path box from now and j's whole path box (it covers j from now on). The
+    // margin covers touching pairs and the rounding of boxes made from different origins.
+    if (!Near(own_, tj.lo, tj.hi, d_ + kTouchGap + 1e-10)) return p;
     const double S = std::min(horizon, Window(j) - t_);
     const Eigen::Vector2d dp = PosAt(j, t_) - P;
     const Eigen::Vector2d dv = VelAt(j, t_) - V;
@@ -368,6 +390,25 @@ class EventSimulation final : public TableSimulation {
       s = next;
     }
     p.t = t_ + s;
+    return p;
+  }
+
+  // PredictPair through the pair's memo: a pair whose trajectories have not changed since it
+  // was last predicted keeps its contact, or its absence up to where it was looked for (the
+  // search is the same from either ball; only where it stops differs). A ball predicted after
+  // its partner (the two balls of a collision, a group after a sustained contact, a ball whose
+  // earliest event went stale) then solves only the pairs that changed.
+  Pending PairEvent(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
+                    double horizon) {
+    const int a = std::min(i, j), b = std::max(i, j);
+    PairMemo& m = memo_[static_cast<size_t>(a) * n_ + b];
+    const uint32_t va = traj_[a].version, vb = traj_[b].version;
+    const double end = t_ + std::min(horizon, Window(j) - t_);
+    if (m.va == va && m.vb == vb && m.t >= t_ && (m.t < kNever || m.until >= end)) {
+      return Pending{.t = m.t, .kind = Kind::kBall, .a = a, .b = b, .va = va, .vb = vb};
+    }
+    const Pending p = PredictPair(i, P, V, j, horizon);
+    m = PairMemo{.t = p.t, .until = end, .va = va, .vb = vb};
     return p;
   }
 
@@ -494,10 +535,12 @@ class EventSimulation final : public TableSimulation {
       if (c.found() && c.Before(best)) best = c;
     };
     const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
+    own_ = Box{P, P};
+    if (IsTranslating(tr.state)) own_ = PathBox(P, V, tr.a, Window(i) - t_);
     if (IsTranslating(tr.state) && model_.spec().bounded) {
       const double S = Window(i) - t_;
       const Eigen::Vector2d& A = tr.a;
-      const Box box = PathBox(P, V, A, S);
+      const Box& box = own_;
       if (cushions_) {
         const int nc = static_cast<int>(model_.spec().cushions.size());
         for (int k = 0; k < nc; ++k) consider(PredictCushion(i, k, box, S, P, V, A));
@@ -514,7 +557,7 @@ class EventSimulation final : public TableSimulation {
     for (int j = 0; j < n_; ++j) {
       if (j == i) continue;
       const double horizon = std::min(Window(i), best.t) - t_;
-      consider(PredictPair(i, P, V, j, horizon));
+      consider(PairEvent(i, P, V, j, horizon));
     }
     best_[i] = best;
     if (best.found()) Push(best);
@@ -625,12 +668,12 @@ class EventSimulation final : public TableSimulation {
         const double open = std::max(0.0, want - dist);
         const bool ma = IsTranslating(ta.state), mb = IsTranslating(tb.state);
         if (ma && mb) {
-          ta.r0 -= 0.5 * open * n;
-          tb.r0 += 0.5 * open * n;
+          MoveOrigin(ia, -0.5 * open * n);
+          MoveOrigin(ib, 0.5 * open * n);
         } else if (ma) {
-          ta.r0 -= open * n;
+          MoveOrigin(ia, -open * n);
         } else if (mb) {
-          tb.r0 += open * n;
+          MoveOrigin(ib, open * n);
         }
       }
     }
@@ -638,9 +681,8 @@ class EventSimulation final : public TableSimulation {
 
   // The slot of ball i in the cluster being resolved (its state at t_ on first use).
   int Slot(int i) {
-    for (size_t k = 0; k < cluster_.size(); ++k) {
-      if (cluster_[k] == i) return static_cast<int>(k);
-    }
+    if (slot_of_[i] >= 0) return slot_of_[i];
+    slot_of_[i] = static_cast<int>(cluster_.size());
     cluster_.push_back(i);
     cluster_balls_.emplace_back();
     Eval(i, t_, &cluster_balls_.back());
@@ -658,10 +700,22 @@ class EventSimulation final : public TableSimulation {
   // the group, and only the balls that changed are predicted again. A pair of the group found
   // approaching faster is a real collision: left to the queue, which has it at once.
   void HandleSustained(int ia, int ib, std::vector<Event>* events) {
+    for (const int i : cluster_) slot_of_[i] = -1;
     cluster_.clear();
     cluster_balls_.clear();
     cluster_from_.clear();
     cluster_pairs_.clear();
+    // Positions now of every ball, for finding the group.
+    pos_.resize(n_);
+    vel_.resize(n_);
+    for (int j = 0; j < n_; ++j) pos_[j] = PosAt(j, t_);
+    // Within the largest resting gap (a cheap squared test first).
+    const double link = d_ + gap_;
+    const double link2 = link * link * (1.0 + 1e-9);
+    const auto linked = [&](const Eigen::Vector2d& dp) {
+      const double q = dp.squaredNorm();
+      return q < link2 && std::sqrt(q) - d_ < gap_;
+    };
     const auto resolve = [&](int i, int j) {
       const int si = Slot(i), sj = Slot(j);
       if (CollideBallsResting(model_, o_.effects, &cluster_balls_[si], &cluster_balls_[sj])) {
@@ -683,11 +737,8 @@ class EventSimulation final : public TableSimulation {
     for (size_t k = 0; k < cluster_.size(); ++k) {
       const Eigen::Vector2d ri = cluster_balls_[k].r.head<2>();
       for (int j = 0; j < n_; ++j) {
-        if (traj_[j].state == MotionState::kPocketed ||
-            std::find(cluster_.begin(), cluster_.end(), j) != cluster_.end()) {
-          continue;
-        }
-        if ((PosAt(j, t_) - ri).norm() - d_ < gap_) Slot(j);
+        if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
+        if (linked(pos_[j] - ri)) Slot(j);
       }
     }
     // Sweeps over the group's touching pairs: each approaching one is resolved. Only pairs
@@ -704,8 +755,9 @@ class EventSimulation final : public TableSimulation {
           const Ball& bk = cluster_balls_[k];
           const Ball& bq = cluster_balls_[q];
           const Eigen::Vector2d dp = (bq.r - bk.r).head<2>();
+          if (!linked(dp)) continue;
           const double dist = dp.norm();
-          if (!(dist > 0.0) || dist - d_ >= gap_) continue;
+          if (!(dist > 0.0)) continue;
           const double approach = (bk.v - bq.v).head<2>().dot(dp / dist);
           if (approach <= kSweepApproach || approach >= kRestingContactSpeed) continue;
           resolve(std::min(cluster_[k], cluster_[q]), std::max(cluster_[k], cluster_[q]));
@@ -753,16 +805,11 @@ class EventSimulation final : public TableSimulation {
       return IsTranslating(traj_[i].state) ||
              (jammed && traj_[i].state != MotionState::kPocketed);
     };
-    // Positions and velocities now of every ball (the passes move positions only).
-    pos_.resize(n_);
-    vel_.resize(n_);
+    // Every ball's position and velocity now, after the impulses (the passes move positions).
     for (int j = 0; j < n_; ++j) {
       pos_[j] = PosAt(j, t_);
       vel_[j] = VelAt(j, t_);
     }
-    const auto in_group = [&](int j) {
-      return std::find(cluster_.begin(), cluster_.end(), j) != cluster_.end();
-    };
     // Whether ball i can move to p without coming closer than 2R to a ball other than
     // `partner` to which it is not already closer.
     const auto free = [&](int i, int partner, const Eigen::Vector2d& p) {
@@ -776,7 +823,7 @@ class EventSimulation final : public TableSimulation {
     const auto shift = [&](size_t k, const Eigen::Vector2d& by) {
       restart(k);
       const int i = cluster_[k];
-      traj_[i].r0 += by;
+      MoveOrigin(i, by);
       pos_[i] += by;
     };
     size_t grown = 0;  // group members [0, grown) have been scanned for new neighbours
@@ -785,8 +832,9 @@ class EventSimulation final : public TableSimulation {
       // A ball within the resting gap of the group joins it.
       for (size_t k = pass == 0 ? 0 : grown; k < cluster_.size(); ++k) {
         for (int j = 0; j < n_; ++j) {
-          if (traj_[j].state == MotionState::kPocketed || in_group(j)) continue;
-          if ((pos_[j] - pos_[cluster_[k]]).norm() < d_ + gap_) {
+          if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
+          const Eigen::Vector2d dp = pos_[j] - pos_[cluster_[k]];
+          if (dp.squaredNorm() < link2 && dp.norm() < link) {
             Slot(j);
             cluster_moved_.push_back(0);
           }
@@ -798,8 +846,9 @@ class EventSimulation final : public TableSimulation {
         for (size_t q = k + 1; q < g; ++q) {
           const int i = cluster_[k], j = cluster_[q];
           const Eigen::Vector2d dp = pos_[j] - pos_[i];
+          if (!(dp.squaredNorm() < link2)) continue;
           const double dist = dp.norm();
-          if (!(dist > 0.0) || dist >= d_ + gap_) continue;
+          if (!(dist > 0.0) || dist >= link) continue;
           const Eigen::Vector2d n = dp / dist;
           if ((vel_[j] - vel_[i]).dot(n) >= kRestingContactSpeed) continue;
           const double open = d_ + RestingGap(-(traj_[j].a - traj_[i].a).dot(n), gap_) - dist;
@@ -845,8 +894,7 @@ class EventSimulation final : public TableSimulation {
       if (cluster_moved_[k]) Predict(cluster_[k]);
     }
     for (int j = 0; j < n_; ++j) {
-      const auto it = std::find(cluster_.begin(), cluster_.end(), j);
-      if (it != cluster_.end() && cluster_moved_[it - cluster_.begin()]) continue;
+      if (slot_of_[j] >= 0 && cluster_moved_[slot_of_[j]]) continue;
       const Pending& p = best_[j];
       if (!p.found()) continue;
       for (size_t k = 0; k < g; ++k) {
@@ -920,7 +968,7 @@ class EventSimulation final : public TableSimulation {
       Trajectory& ta = traj_[ia];
       if (dist < dc_ + kRestingGap && ta.v0.dot(n) < kRestingContactSpeed &&
           IsTranslating(ta.state)) {
-        ta.r0 += std::max(0.0, dc_ + RestingGap(-ta.a.dot(n), kRestingGap) - dist) * n;
+        MoveOrigin(ia, std::max(0.0, dc_ + RestingGap(-ta.a.dot(n), kRestingGap) - dist) * n);
       }
     } else {
       RecordTransition(t_, ia, from, a, events);
@@ -950,6 +998,15 @@ class EventSimulation final : public TableSimulation {
   const int n_;
   std::vector<Trajectory> traj_;
   std::vector<Pending> best_;  // each ball's earliest predicted event
+  // The last prediction of each pair (a < b, at a * n + b): its contact time (kNever: none up
+  // to `until`) for the trajectory versions it was made from.
+  struct PairMemo {
+    double t = kNever;
+    double until = -kNever;
+    uint32_t va = 0, vb = 0;  // versions start at 1: an unused memo matches nothing
+  };
+  std::vector<PairMemo> memo_;
+  Box own_;  // the path box of the ball Predict works on, from now to its window's end
   std::vector<Pending> heap_;
   double t_;
   bool dirty_ = true;
@@ -966,6 +1023,7 @@ class EventSimulation final : public TableSimulation {
   // The group a sustained contact reaches (HandleSustained): ball indices, their states at t_
   // and motion states before, and the pairs resolved, in order.
   std::vector<int> cluster_;
+  std::vector<int> slot_of_;  // per ball: its slot in cluster_, or -1
   std::vector<Ball> cluster_balls_;
   std::vector<MotionState> cluster_from_;
   std::vector<std::pair<int, int>> cluster_pairs_;

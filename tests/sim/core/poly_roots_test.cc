@@ -572,6 +572,61 @@ TEST(FirstDownCrossingTest, UpCrossingIsNeverReturned) {
   EXPECT_EQ(FirstDown(q, 0.7, 1.0), kInf);  // up at 0.9 only
 }
 
+// Pairs of balls passing near each other (the engine's common case: a neighbour moving apart,
+// or missing by a little): whether a contact is found must match the quartic's true minimum
+// over the window, computed from the real roots of p' by Eigen. FirstDownCrossing skips the
+// search where the Bernstein coefficients prove p > 0; a pair it skips wrongly would show here
+// as a contact missed.
+TEST(FirstDownCrossingTest, NearMissesAndNearHitsAgainstTheTrueMinimum) {
+  std::mt19937_64 rng(0x6e6172);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int hits = 0, misses = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    // Relative position 2R plus a gap of 1 nm to 10 cm, speeds up to 5 m/s, accelerations of
+    // the cloth (up to 5 m/s^2), windows of 1 ms to 2 s.
+    const double gap = std::pow(10.0, -9.0 + 8.0 * (0.5 + 0.5 * unit(rng)));
+    const double angle = 3.141592653589793 * unit(rng);
+    const Eigen::Vector2d dp = (0.05715 + gap) * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    const Eigen::Vector2d dv = 5.0 * std::pow(10.0, -4.0 * (0.5 + 0.5 * unit(rng))) *
+                               Eigen::Vector2d(unit(rng), unit(rng));
+    const Eigen::Vector2d da = 5.0 * Eigen::Vector2d(unit(rng), unit(rng));
+    const double S = std::pow(10.0, -3.0 + 3.3 * (0.5 + 0.5 * unit(rng)));
+    const double d = 0.05715;
+    const double c[5] = {(dp.norm() - d) * (dp.norm() + d), 2.0 * dv.dot(dp),
+                         dv.squaredNorm() + da.dot(dp), da.dot(dv), 0.25 * da.squaredNorm()};
+    // The true minimum over [0, S]: at an end or at a real root of p' inside.
+    double lowest = std::min(PolyEval(c, 4, 0.0), PolyEval(c, 4, S));
+    Eigen::Matrix<double, 4, 1> deriv;
+    for (int k = 1; k <= 4; ++k) deriv[k - 1] = k * c[k];
+    if (deriv[3] != 0.0) {
+      Eigen::PolynomialSolver<double, 3> solver(deriv);
+      for (const auto& z : solver.roots()) {
+        if (std::abs(z.imag()) <= 1e-12 * (1.0 + std::abs(z.real())) && z.real() > 0.0 &&
+            z.real() < S) {
+          lowest = std::min(lowest, PolyEval(c, 4, z.real()));
+        }
+      }
+    }
+    // Clear cases only: a minimum well away from zero against the size of the terms.
+    double scale = 0.0;
+    for (int k = 0; k <= 4; ++k) scale = std::max(scale, std::abs(c[k]) * std::pow(S, k));
+    const double x = FirstDownCrossing(c, 4, 0.0, S);
+    if (lowest > 1e-9 * scale) {
+      EXPECT_EQ(x, kInf) << "trial " << trial << ": p > 0 on the window, min " << lowest;
+      ++misses;
+    } else if (lowest < -1e-9 * scale) {
+      EXPECT_LT(x, kInf) << "trial " << trial << ": p reaches " << lowest << " on [0, " << S
+                         << "], yet no crossing";
+      if (x < kInf) EXPECT_LE(std::abs(PolyEval(c, 4, x)), 1e-9 * scale) << "trial " << trial;
+      ++hits;
+    }
+  }
+  // Both kinds must be well represented for the test to mean anything.
+  EXPECT_GT(hits, 2000);
+  EXPECT_GT(misses, 2000);
+  std::printf("near passes: %d contacts, %d misses checked\n", hits, misses);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The physical case: ball-ball contact times
 
