@@ -173,6 +173,47 @@ def take_turn(server, tid, tokens, strike):
     server.tables.Shoot(req, timeout=10)
 
 
+def wait_swing_over(server, session_id, timeout=60):
+    """Waits until the session's swing in flight (if any) has ended; returns its SessionInfo."""
+    deadline = time.monotonic() + timeout
+    while True:
+        info = server.swings.GetSession(sp.GetSessionRequest(session_id=session_id), timeout=10)
+        if info.phase != sp.SWING_PHASE_SWINGING:
+            return info
+        if time.monotonic() > deadline:
+            raise AssertionError("session %s still swinging after %g s" % (session_id, timeout))
+        time.sleep(0.05)
+
+
+def drive_swing(server, session_id, token, commands):
+    """Starts a driven swing that sends `commands` and keeps its stream open until `done` is
+    set; returns (the stream, its first snapshot, done)."""
+    msgs = [sp.DriveSwingRequest(start=sp.DriveStart(
+        session_id=session_id, token=token, qalpha_nm=60, qbeta_nm=10))]
+    msgs += [sp.DriveSwingRequest(torque=c) for c in commands]
+    done = threading.Event()
+
+    def requests():
+        for m in msgs:
+            yield m
+        done.wait(30)
+
+    stream = server.swings.DriveSwing(requests())
+    first = next(stream)  # the swing started
+    return stream, first, done
+
+
+def swing_events_after(server, session_id, sequence):
+    """A spectator's first snapshot when it resumes after `sequence`: (resync, its events)."""
+    stream = server.swings.WatchSwing(sp.WatchSwingRequest(session_id=session_id,
+                                                           from_sequence=sequence))
+    try:
+        first = next(stream)
+    finally:
+        stream.cancel()
+    return first.resync, list(first.events)
+
+
 class Watcher(threading.Thread):
     """Collects a table's events and the last sequence seen, until the stream ends."""
 
@@ -330,19 +371,7 @@ class DurabilityBase:
         def drive(server):
             created = server.swings.CreateSession(sp.CreateSessionRequest(), timeout=30)
             sid, token = created.session_id, created.token
-            msgs = [sp.DriveSwingRequest(start=sp.DriveStart(
-                session_id=sid, token=token, qalpha_nm=60, qbeta_nm=10))]
-            msgs += [sp.DriveSwingRequest(torque=c) for c in commands]
-            done = threading.Event()
-
-            def requests():
-                for m in msgs:
-                    yield m
-                done.wait(30)
-
-            stream = server.swings.DriveSwing(requests())
-            first = next(stream)  # the swing started
-            return sid, token, stream, first, done
+            return (sid, token) + drive_swing(server, sid, token, commands)
 
         ref = Server([], "--clock_rate", "0.1")
         try:
@@ -363,17 +392,106 @@ class DurabilityBase:
         done.set()
         s = self.start("--clock_rate", "0.1")
         try:
-            deadline = time.monotonic() + 60
-            while True:
-                info = s.swings.GetSession(sp.GetSessionRequest(session_id=sid), timeout=10)
-                if "SWINGING" not in sp.SwingPhase.Name(info.phase):
-                    break
-                self.assertLess(time.monotonic(), deadline)
-                time.sleep(0.1)
+            info = wait_swing_over(s, sid)
             self.assertEqual(info.swings, 1)
             self.assertTrue(info.HasField("last_impact"))
             self.assertEqual(info.last_impact, ref_info.last_impact)
             s.swings.ResetSwing(sp.ResetSwingRequest(session_id=sid, token=token), timeout=10)
+        finally:
+            s.stop()
+
+    def test_swing_session_restores_from_its_checkpoint(self):
+        # Ten swings, then an eleventh, driven, killed mid-swing. A session writes a checkpoint
+        # at the end of every 8th swing, so the restore loads the one of swing 8 and replays only
+        # what followed it: swings 9 and 10 and the swing in flight. Only swing 8 runs to impact
+        # (the others stop after 0.02 s), so the last impact at the kill is in the checkpoint
+        # alone; the address moves with a reset before swing 5 (in the checkpoint) and its wrist
+        # cock with one before swing 10 (in the journal after it).
+        commands = [sp.TorqueCommand(t_s=0.05 * k, qalpha_nm=60 + 5 * k, qbeta_nm=10 - k)
+                    for k in range(1, 6)]
+        resets = {5: dict(gamma_deg=130.0), 10: dict(beta0_deg=115.0)}
+
+        def prepare(server):
+            created = server.swings.CreateSession(sp.CreateSessionRequest(), timeout=30)
+            sid, token = created.session_id, created.token
+            for k in range(1, 11):
+                if k in resets:
+                    server.swings.ResetSwing(sp.ResetSwingRequest(
+                        session_id=sid, token=token, **resets[k]), timeout=10)
+                start = sp.StartSwingRequest(session_id=sid, token=token)  # the chapter's
+                if k != 8:
+                    start.stop = sp.SWING_STOP_DURATION
+                    start.duration_s = 0.02
+                self.assertEqual(server.swings.StartSwing(start, timeout=10).swing_id, k)
+                info = wait_swing_over(server, sid)
+                self.assertEqual(info.last_end_reason, "impact" if k == 8 else "duration")
+                if k == 8:
+                    checkpointed = info.sequence  # the checkpoint's: it is taken at this rest
+            return sid, token, checkpointed, info
+
+        def same_session(a, b):
+            for field in ("swing_id", "swings", "gamma_deg", "beta0_deg", "integrator", "dt_s",
+                          "tick_hz", "profile", "last_end_reason", "last_impact"):
+                self.assertEqual(getattr(a, field), getattr(b, field), field)
+
+        # Slow motion (a tenth of real time), as for the driven swing above.
+        ref = Server([], "--clock_rate", "0.1")
+        try:
+            sid, token, _, ref_before = prepare(ref)
+            stream, _, done = drive_swing(ref, sid, token, commands)
+            for _ in stream:
+                pass
+            done.set()
+            ref_end = wait_swing_over(ref, sid)
+        finally:
+            ref.stop()
+
+        s = self.start("--clock_rate", "0.1")
+        sid, token, checkpointed, before = prepare(s)
+        same_session(before, ref_before)
+        self.assertEqual((before.gamma_deg, before.beta0_deg), (130.0, 115.0))
+        self.assertTrue(before.HasField("last_impact"))
+        stream, _, done = drive_swing(s, sid, token, commands)
+        time.sleep(1.0)  # 0.1 s of swing time: every command accepted, the swing not over
+        mid = s.swings.GetSession(sp.GetSessionRequest(session_id=sid), timeout=10)
+        self.assertEqual(mid.phase, sp.SWING_PHASE_SWINGING)
+        self.assertEqual(mid.swings, 11)
+        self.assertEqual(mid.last_impact, before.last_impact)  # swing 8's, still
+        resync, live = swing_events_after(s, sid, checkpointed)
+        self.assertFalse(resync)
+        s.kill9()
+        done.set()
+        s = self.start("--clock_rate", "0.1")
+        try:
+            info = s.swings.GetSession(sp.GetSessionRequest(session_id=sid), timeout=10)
+            self.assertEqual(info.session_id, sid)
+            self.assertEqual(info.phase, sp.SWING_PHASE_SWINGING)  # the swing goes on
+            same_session(info, mid)  # swing 8's impact and the first reset: the checkpoint's
+            self.assertGreaterEqual(info.sequence, mid.sequence)
+            # The restore started from the checkpoint: the events up to it are no longer held
+            # (a spectator resuming from before it is resynced), and the ones after it were
+            # replayed as they happened (swings 9 and 10, the second reset, the swing in flight).
+            resync, _ = swing_events_after(s, sid, checkpointed - 1)
+            self.assertTrue(resync, "a restore that replayed every swing keeps all events")
+            resync, replayed = swing_events_after(s, sid, checkpointed)
+            self.assertFalse(resync)
+            self.assertEqual(replayed[:len(live)], live)
+            self.assertEqual(live[0].sequence, checkpointed + 1)
+            self.assertEqual([e.swing_id for e in live if e.kind == sp.SWING_EVENT_STARTED],
+                             [9, 10, 11])
+
+            end = wait_swing_over(s, sid)
+            same_session(end, ref_end)  # the swing in flight ended as uninterrupted
+            self.assertEqual(end.swings, 11)
+            self.assertEqual(end.last_end_reason, "impact")
+            self.assertNotEqual(end.last_impact, before.last_impact)
+            self.assertEqual(end.state, ref_end.state)
+            # The seat's token still works, and only it.
+            s.swings.ResetSwing(sp.ResetSwingRequest(session_id=sid, token=token), timeout=10)
+            with self.assertRaises(grpc.RpcError) as e:
+                s.swings.ResetSwing(sp.ResetSwingRequest(session_id=sid, token="x" * 32),
+                                    timeout=10)
+            self.assertEqual(e.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
         finally:
             s.stop()
 
