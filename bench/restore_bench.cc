@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/match.h"
 #include "absl/strings/str_format.h"
 #include "server/app/server_app.h"
 
@@ -115,13 +117,28 @@ int Run() {
         shoot.set_table_id(tables[i].first);
         shoot.set_token(tables[i].second);
         shoot.mutable_strike()->set_ball_speed_mps(s == 0 ? 8.0 : 1.5 + 0.1 * (i % 7));
-        shoot.mutable_strike()->set_phi_deg(s == 0 ? 0.3 * (i % 5) : 47.0 * s + i % 13);
-        for (;;) {
+        shoot.mutable_strike()->set_phi_deg(s == 0 ? 0.3 * (i % 5)
+                                                   : std::fmod(47.0 * s + i % 13, 360.0));
+        for (int attempt = 0;; ++attempt) {
           absl::StatusOr<v1::ShootResponse> r = registry.Shoot(shoot);
           if (r.ok()) break;
-          if (r.status().code() != absl::StatusCode::kFailedPrecondition) {
-            std::fprintf(stderr, "shoot: %s\n", std::string(r.status().message()).c_str());
+          const std::string why(r.status().message());
+          if (r.status().code() != absl::StatusCode::kFailedPrecondition || attempt == 3000) {
+            std::fprintf(stderr, "shoot: %s\n", why.c_str());
             return 1;
+          }
+          if (absl::StrContains(why, "is pocketed")) {
+            // The cue ball fell: back on the head string, the first free place along it.
+            for (int k = 0; k < 9; ++k) {
+              v1::PlaceBallRequest place;
+              place.set_table_id(tables[i].first);
+              place.set_token(tables[i].second);
+              place.mutable_ball()->set_id("cue");
+              place.mutable_ball()->set_x_m(-0.635);
+              place.mutable_ball()->set_y_m(0.1 * (k - 4));
+              if (registry.Place(place).ok()) break;
+            }
+            continue;
           }
           std::this_thread::sleep_for(std::chrono::milliseconds(20));  // still moving
         }

@@ -5,6 +5,7 @@
 #include <random>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "absl/strings/str_format.h"
 #include "sim/billiards/cloth.h"
@@ -135,16 +136,33 @@ double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
 }  // namespace
 
 bool InPocketMouth(const TableModel& model, const Eigen::Vector2d& xy) {
-  const double radius = model.radius();
-  bool near_pocket = false;
+  // Clear of every cushion and jaw by the contact distance the engine keeps (a ball at rest
+  // against a jaw is that far from its nose line, less than a radius), to the engine's
+  // penetration tolerance.
+  const double clear = model.cushion_contact_distance() - 1e-6;
+  const std::vector<CushionSegment>& cushions = model.spec().cushions;
+  for (const CushionSegment& c : cushions) {
+    if (SegmentDistance(xy, c.a, c.b) < clear) return false;
+  }
+  const auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+    return u.x() * v.y() - u.y() * v.x();
+  };
   for (const Pocket& pocket : model.spec().pockets) {
-    near_pocket |= (xy - pocket.centre).norm() <= pocket.radius_m + 2.0 * radius;
+    if ((xy - pocket.centre).norm() > pocket.radius_m + 2.0 * model.radius()) continue;
+    // Between the jaws: on the pocket's side of both jaw lines (not behind a jaw, inside the
+    // rail).
+    int inside = 0;
+    for (const char* end : {"_a", "_b"}) {
+      const std::string name = "jaw_" + pocket.name + end;
+      for (const CushionSegment& c : cushions) {
+        if (c.name != name) continue;
+        const Eigen::Vector2d e = c.b - c.a;
+        inside += cross(e, xy - c.a) * cross(e, pocket.centre - c.a) > 0.0;
+      }
+    }
+    if (inside == 2) return true;
   }
-  if (!near_pocket) return false;
-  for (const CushionSegment& c : model.spec().cushions) {
-    if (SegmentDistance(xy, c.a, c.b) < radius - 1e-6) return false;
-  }
-  return true;
+  return false;
 }
 
 absl::Status ValidateLayout(const TableModel& model, const TableState& state) {

@@ -62,8 +62,10 @@ absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t ef
                                             const CueStrike& strike);
 
 /// True when a ball centred at `xy` (m) rests in a pocket's mouth: near a pocket (within its
-/// capture radius plus a diameter of its centre) and clear of every cushion and jaw segment by
-/// a radius. The engine can leave a ball there, on the lip, outside the rail lines.
+/// capture radius plus a diameter of its centre), between its jaws (on the pocket's side of
+/// both jaw lines), and clear of every cushion and jaw segment by the cushion contact distance
+/// (a ball resting against a jaw is that far from it). The engine can leave a ball there, on
+/// the lip or against a jaw, outside the rail lines.
 bool InPocketMouth(const TableModel& model, const Eigen::Vector2d& xy);
 
 /// Checks a layout: every ball finite, on the cloth (centre inside the cushions by the contact

@@ -121,6 +121,40 @@ TEST(LayoutTest, ABallRestingInAPocketMouthIsOnTheTable) {
   }
 }
 
+// A ball the engine leaves at rest against a jaw, beyond the rail line, is the cushion
+// contact distance from the jaw: less than a radius (the nose is below the ball's equator).
+// Seen on a 9-ft table: the cue ball came to rest against a corner jaw and the next shot was
+// refused as "not on the cloth". It is playable; a ball pressed into the jaw, or behind it
+// inside the rail, is not.
+TEST(LayoutTest, ABallRestingAgainstAJawIsOnTheTable) {
+  const TableModel m = Model("pool-9ft");
+  const double dc = m.cushion_contact_distance();
+  ASSERT_LT(dc, m.radius() - 1e-6);
+  const double lim_x = 0.5 * m.spec().length_m - dc;
+  const double lim_y = 0.5 * m.spec().width_m - dc;
+  int checked = 0;
+  for (const Pocket& pocket : m.spec().pockets) {
+    for (const char* end : {"_a", "_b"}) {
+      const std::string name = "jaw_" + pocket.name + end;
+      const auto jaw = std::find_if(m.spec().cushions.begin(), m.spec().cushions.end(),
+                                    [&](const CushionSegment& c) { return c.name == name; });
+      ASSERT_NE(jaw, m.spec().cushions.end()) << name;
+      const Eigen::Vector2d mid = 0.5 * (jaw->a + jaw->b), e = (jaw->b - jaw->a).normalized();
+      Eigen::Vector2d in(-e.y(), e.x());  // towards the pocket's side
+      if (in.dot(pocket.centre - jaw->a) < 0.0) in = -in;
+      const Eigen::Vector2d against = mid + (dc + 1e-9) * in;
+      if (std::abs(against.x()) <= lim_x && std::abs(against.y()) <= lim_y) continue;
+      ++checked;
+      EXPECT_TRUE(InPocketMouth(m, against)) << name;
+      TableState s{.balls = {BallAt("cue", against.x(), against.y(), m)}};
+      EXPECT_TRUE(ValidateLayout(m, s).ok()) << name << ": " << ValidateLayout(m, s);
+      EXPECT_FALSE(InPocketMouth(m, mid + (dc - 1e-5) * in)) << name << ": pressed in";
+      EXPECT_FALSE(InPocketMouth(m, mid - (dc + 1e-3) * in)) << name << ": behind the jaw";
+    }
+  }
+  EXPECT_GE(checked, 8);  // the corner jaws at least
+}
+
 TEST(SteppedEngineTest, CcdStopsTunnellingAt13MpsAndOneTwentiethSecondSteps) {
   const TableModel m = Model("unbounded");
   const double r = m.radius();
