@@ -76,8 +76,8 @@ struct Trajectory {
   MotionState state = MotionState::kStationary;
   double t_next = kNever;  // the next transition (absolute time)
   TransitionKind next_kind = TransitionKind::kNone;
-  // Where the path goes from its origin to min(t_next, t0 + kPredictionHorizon): the pairs'
-  // broad phase (a ball at rest: its position).
+  // Where the path goes from its origin to its next transition (the whole plane when that is
+  // beyond the prediction horizon): the pairs' broad phase (a ball at rest: its position).
   Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();
   uint32_t version = 0;
   bool fixed_axis = true;  // the spin axis does not turn: orientation in closed form
@@ -258,9 +258,16 @@ class EventSimulation final : public TableSimulation {
     tr.q_cached = tr.q0;
     tr.lo = tr.hi = tr.r0;
     if (IsTranslating(tr.state)) {
-      const Box box = PathBox(tr.r0, tr.v0, tr.a, std::min(tr.t_next, t + kPredictionHorizon) - t);
-      tr.lo = box.lo;
-      tr.hi = box.hi;
+      if (tr.t_next <= t + kPredictionHorizon) {
+        const Box box = PathBox(tr.r0, tr.v0, tr.a, tr.t_next - t);
+        tr.lo = box.lo;
+        tr.hi = box.hi;
+      } else {
+        // The path outlasts the prediction horizon (no rolling resistance): predictions look
+        // from later times, further along it, than one box from here could cover.
+        tr.lo.setConstant(-kNever);
+        tr.hi.setConstant(kNever);
+      }
     }
     ++tr.version;
   }
@@ -339,8 +346,11 @@ class EventSimulation final : public TableSimulation {
   double Window(int i) const { return std::min(traj_[i].t_next, t_ + kPredictionHorizon); }
 
   // Ball i (at P, V now) against ball j, looking at most `horizon` ahead.
+  // `now_only`, when given, is set when the answer holds only at this instant: the pair was
+  // touching, so what was found depends on how close it is now (the contact now, or a threshold
+  // below 2R for a pair that overlaps by rounding).
   Pending PredictPair(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
-                      double horizon) const {
+                      double horizon, bool* now_only = nullptr) const {
     const Trajectory& ti = traj_[i];
     const Trajectory& tj = traj_[j];
     Pending p{.kind = Kind::kBall, .a = std::min(i, j), .b = std::max(i, j)};
@@ -362,6 +372,7 @@ class EventSimulation final : public TableSimulation {
     if (dist == 0.0) return p;
     const double gap = dist - d_;
     if (gap < kTouchGap) {
+      if (now_only != nullptr) *now_only = true;
       const Eigen::Vector2d n = dp / dist;
       const double approach = -dv.dot(n);
       const double closing = -da.dot(n) - (dv.squaredNorm() - approach * approach) / dist;
@@ -395,7 +406,8 @@ class EventSimulation final : public TableSimulation {
 
   // PredictPair through the pair's memo: a pair whose trajectories have not changed since it
   // was last predicted keeps its contact, or its absence up to where it was looked for (the
-  // search is the same from either ball; only where it stops differs). A ball predicted after
+  // search is the same from either ball; only where it stops differs). A touching pair's
+  // answer depends on the instant it was made, so it is not kept. A ball predicted after
   // its partner (the two balls of a collision, a group after a sustained contact, a ball whose
   // earliest event went stale) then solves only the pairs that changed.
   Pending PairEvent(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
@@ -407,8 +419,9 @@ class EventSimulation final : public TableSimulation {
     if (m.va == va && m.vb == vb && m.t >= t_ && (m.t < kNever || m.until >= end)) {
       return Pending{.t = m.t, .kind = Kind::kBall, .a = a, .b = b, .va = va, .vb = vb};
     }
-    const Pending p = PredictPair(i, P, V, j, horizon);
-    m = PairMemo{.t = p.t, .until = end, .va = va, .vb = vb};
+    bool now_only = false;
+    const Pending p = PredictPair(i, P, V, j, horizon, &now_only);
+    m = now_only ? PairMemo{} : PairMemo{.t = p.t, .until = end, .va = va, .vb = vb};
     return p;
   }
 

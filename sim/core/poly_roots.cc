@@ -69,25 +69,18 @@ int MonotonePieces(const double* c, int degree, double lo, double hi, double* x)
   return m;
 }
 
-// True when p > 0 everywhere on [lo, hi], shown by its Bernstein coefficients there: p lies in
+// True when p > 0 everywhere on [0, hi], shown by its Bernstein coefficients there: p lies in
 // their convex hull (Farouki and Rajan, "On the numerical condition of polynomials in Bernstein
 // form", CAGD 4, 1987), so all of them positive proves it. Each must clear a margin far above
 // the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
 // call passes has no sign change the search below could have found either: it only saves the
 // search. Most predictions in a billiards shot are such pairs (near, but moving apart).
-bool ProvablyPositive(const double* c, int degree, double lo, double hi) {
-  double a[kMaxPolyDegree + 1];
-  for (int k = 0; k <= degree; ++k) a[k] = c[k];
-  if (lo != 0.0) {  // Taylor shift to lo (Horner, synthetic division)
-    for (int k = 0; k < degree; ++k) {
-      for (int j = degree - 1; j >= k; --j) a[j] += lo * a[j + 1];
-    }
-  }
-  const double w = hi - lo;
+bool ProvablyPositive(const double* c, int degree, double hi) {
+  double a[kMaxPolyDegree + 1];  // p(hi t) = sum a_k t^k, t in [0, 1]
   double scale = 1.0, largest = 0.0;
   for (int k = 0; k <= degree; ++k) {
-    a[k] *= scale;
-    scale *= w;
+    a[k] = c[k] * scale;
+    scale *= hi;
     largest = std::max(largest, std::abs(a[k]));
   }
   if (!(largest < std::numeric_limits<double>::infinity())) return false;
@@ -141,7 +134,9 @@ double FirstDownCrossing(const double* c, int degree, double lo, double hi) {
   constexpr double kNever = std::numeric_limits<double>::infinity();
   degree = Degree(c, degree);
   if (degree == 0 || !(lo <= hi)) return kNever;
-  if (ProvablyPositive(c, degree, lo, hi)) return kNever;
+  // From lo = 0 only (every engine search): a shift to another lo would add rounding the
+  // margin does not bound.
+  if (lo == 0.0 && ProvablyPositive(c, degree, hi)) return kNever;
   double x[kMaxPolyDegree + 1];
   const int m = MonotonePieces(c, degree, lo, hi, x);
   double fa = PolyEval(c, degree, x[0]);
