@@ -134,15 +134,19 @@ std::shared_ptr<SwingWatcher> EndSwing(SessionHost& host, Session& s, const sw::
   return std::move(s.driver);
 }
 
-// At rest after a swing's end (no swing in flight, no driver attached): the session as a
-// checkpoint covering its journal so far, every checkpoint_every_swings swings. Not while it is
-// replayed: its checkpoint is in the store already, or will be at its next live swing's end.
+// At rest (a swing just ended, or a reset), once checkpoint_every_swings swings have started
+// since the last checkpoint: the session as a checkpoint covering its journal so far. Swings
+// ended by a reset count too, so a client that always resets mid-swing still gets them. Not
+// while it is replayed: its checkpoint is in the store already, or will be at its next live
+// rest.
 void Checkpoint(SessionHost& host, Session& s) ABSL_EXCLUSIVE_LOCKS_REQUIRED(s.mu) {
   Journal* journal = host.journal();
-  if (journal == nullptr || s.restoring || s.live != nullptr || s.driver != nullptr ||
-      s.checkpoint_every_swings == 0 || s.swings % s.checkpoint_every_swings != 0) {
+  if (journal == nullptr || s.restoring || s.live != nullptr ||
+      s.checkpoint_every_swings == 0 ||
+      s.swings - s.checkpointed_swings < s.checkpoint_every_swings) {
     return;
   }
+  s.checkpointed_swings = s.swings;
   const SessionRestState state{.tick = s.tick,
                                .sequence = s.sequence,
                                .params = s.params,
@@ -186,6 +190,7 @@ absl::Status LoadCheckpoint(Session& s, const std::string& bytes)
   s.qbeta = state->qbeta;
   s.last_impact = state->last_impact;
   s.last_end_reason = std::move(state->last_end_reason);
+  s.checkpointed_swings = s.swings;
   return absl::OkStatus();
 }
 
@@ -625,6 +630,7 @@ absl::StatusOr<v1::ResetSwingResponse> SessionRegistry::ResetOn(
   v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_RESET, 0.0, s.swings, tick);
   e.set_seat(static_cast<uint32_t>(seat));
   fresh.push_back(s.Log(std::move(e)));
+  Checkpoint(host_, s);
   host_.CountEvents(fresh.size());
   s.OfferFrameAt(tick, fresh, &pump);
   if (driver != nullptr) {

@@ -133,6 +133,9 @@ struct SessionKind {
     double qalpha = 0, qbeta = 0;            ///< in force at `state`
     std::optional<swing::SwingSample> last_impact;
     std::string last_end_reason;
+    /// `swings` when the last checkpoint was written or loaded (bookkeeping, not state: a
+    /// checkpoint does not hold it).
+    uint64_t checkpointed_swings = 0;
   };
   /// One wake's swing events, and the ball launched at an impact (computed off the lock).
   struct TickOut {

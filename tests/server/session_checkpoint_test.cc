@@ -62,7 +62,7 @@ static_assert(CountFields<sw::SwingSample>() == 15, "SwingSample changed: update
 static_assert(CountFields<SessionRestState>() == 12,
               "SessionRestState changed: update the checkpoint");
 // Every member of a live session, stored or derived (session_checkpoint.h).
-static_assert(CountFields<SessionKind::Data>() == 19,
+static_assert(CountFields<SessionKind::Data>() == 20,
               "SessionKind::Data changed: store the new member in the checkpoint, or say in "
               "session_checkpoint.h why it need not be");
 
@@ -373,6 +373,35 @@ TEST_F(SessionCheckpointTest, RealCheckpointsHoldTheSessionAtEachCheckpointedSwi
 
 // ---------------------------------------------------------------------------------------------
 // 2. Adversarial values.
+
+// A client that resets every swing before it ends never reaches a swing's end at rest; its
+// resets are rests too, so it still gets a checkpoint every kEvery swings (else a restore would
+// replay its whole history).
+TEST_F(SessionCheckpointTest, SwingsEndedByResetsAreCheckpointedToo) {
+  SessionRegistry reg(Limits(), nullptr, /*workers=*/1);
+  reg.SetJournal(&journal_);
+  absl::StatusOr<v1::CreateSessionResponse> s = reg.Create(CreateReq());
+  ASSERT_TRUE(s.ok()) << s.status();
+  for (uint64_t k = 1; k <= 7; ++k) {
+    v1::StartSwingRequest start;
+    start.set_session_id(s->session_id());
+    start.set_token(s->token());
+    ASSERT_TRUE(reg.Start(start).ok());
+    EXPECT_EQ(Info(reg, s->session_id()).phase(), v1::SWING_PHASE_SWINGING);
+    v1::ResetSwingRequest reset;
+    reset.set_session_id(s->session_id());
+    reset.set_token(s->token());
+    ASSERT_TRUE(reg.Reset(reset).ok());
+  }
+  const std::vector<MemoryJournal::Written> written = journal_.checkpoints(s->session_id());
+  ASSERT_EQ(written.size(), 2u) << "a checkpoint at the resets after swings 3 and 6";
+  for (size_t c = 0; c < written.size(); ++c) {
+    const SessionRestState state = Decoded(written[c]);
+    EXPECT_EQ(state.swings, kEvery * (c + 1));
+    EXPECT_EQ(state.phase, SessionPhase::kAddress);
+    EXPECT_EQ(state.last_end_reason, "reset");
+  }
+}
 
 TEST(SessionCheckpointValuesTest, EveryDoubleIsKeptBitForBit) {
   const std::vector<double> values = {
