@@ -692,6 +692,38 @@ TEST(EventEngineTest, BadTimesAreErrors) {
   EXPECT_FALSE(TableSimulation::Create(m, kEvent, s, &ev).ok());
 }
 
+// Paths that outlast the 1000 s prediction horizon (no rolling resistance: a rolling ball never
+// stops). J rolls towards K; M knocks K away at 400 s, so J is predicted again then and its next
+// look moves to 1400 s, with its path unchanged since t = 0. I, slower, rolls towards J and
+// looks again at 1000 s (its own horizon): the contact, at 1200 s, is found only then, against
+// where J is beyond its first 1000 s. A broad phase that kept J's box to its first horizon
+// culled the pair, and the two passed through each other.
+TEST(EventEngineTest, PathsBeyondThePredictionHorizonStillMeet) {
+  const TableModel m = Model("unbounded");
+  const double R = m.radius(), d = 2.0 * R;
+  const auto rolling = [&](const char* id, double x, double y, double vx, double vy) {
+    return BallAt(id, x, y, m, {vx, vy, 0.0}, {-vy / R, vx / R, 0.0});
+  };
+  TableState s{.balls = {rolling("J", 0.0, 0.0, 0.01, 0.0), BallAt("K", 5.0 + d, 0.0, m),
+                         rolling("M", 5.0 + d, -4.0 - d, 0.0, 0.01),
+                         rolling("I", 14.4 + d, 0.0, -0.002, 0.0)}};
+  ASSERT_EQ(s.balls[0].state, MotionState::kRolling);
+  SolverOptions o = kEvent;
+  o.effects |= kEffectDisableRollingResistance;
+  std::vector<Event> ev;
+  std::unique_ptr<TableSimulation> sim = Sim(m, o, s, &ev);
+  ASSERT_TRUE(sim->AdvanceTo(1300.0, &ev).ok());
+  const Event* hit = nullptr;
+  for (const Event& e : ev) {
+    if (e.kind == EventKind::kBallBall && ((e.a == 0 && e.b == 3) || (e.a == 3 && e.b == 0))) {
+      hit = &e;
+    }
+  }
+  ASSERT_NE(hit, nullptr) << "J and I never met";
+  EXPECT_NEAR(hit->t_s, 1200.0, 1.0);
+  EXPECT_LE(LargestOverlap(m, sim->state()), 1e-9);
+}
+
 // --- Orientation -------------------------------------------------------------------------------
 
 // Rolling straight without side spin turns the ball about a fixed axis by distance / R exactly;
