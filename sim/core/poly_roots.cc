@@ -69,6 +69,14 @@ int MonotonePieces(const double* c, int degree, double lo, double hi, double* x)
   return m;
 }
 
+}  // namespace
+
+double PolyEval(const double* c, int degree, double x) {
+  double f = c[degree];
+  for (int k = degree - 1; k >= 0; --k) f = f * x + c[k];
+  return f;
+}
+
 // True when p > 0 everywhere on [0, hi], shown by its Bernstein coefficients there: p lies in
 // their convex hull (Farouki and Rajan, "On the numerical condition of polynomials in Bernstein
 // form", CAGD 4, 1987), so all of them positive proves it. Each must clear a margin far above
@@ -98,14 +106,6 @@ bool ProvablyPositive(const double* c, int degree, double hi) {
     if (!(b > margin)) return false;
   }
   return true;
-}
-
-}  // namespace
-
-double PolyEval(const double* c, int degree, double x) {
-  double f = c[degree];
-  for (int k = degree - 1; k >= 0; --k) f = f * x + c[k];
-  return f;
 }
 
 int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots) {

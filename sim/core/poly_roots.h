@@ -25,8 +25,14 @@ int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots
 
 /// The first x in [lo, hi] at which p passes from positive to <= 0 (a downward crossing: for
 /// p = |gap vector|^2 - d^2, the first approaching contact), or +infinity. When p(lo) <= 0 the
-/// search starts after p has become positive again. degree <= kMaxPolyDegree.
+/// search starts after p has become positive again. degree <= kMaxPolyDegree. From lo = 0 a p
+/// that ProvablyPositive accepts is answered without a search.
 double FirstDownCrossing(const double* c, int degree, double lo, double hi);
+
+/// True when p > 0 everywhere on [0, hi] (hi > 0) is proved by its Bernstein coefficients there,
+/// each clearing a margin of 1e-12 of the largest scaled coefficient (far above the rounding of
+/// the conversion and of evaluating p). False proves nothing. degree <= kMaxPolyDegree.
+bool ProvablyPositive(const double* c, int degree, double hi);
 
 }  // namespace sportsim
 

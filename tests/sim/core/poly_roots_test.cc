@@ -572,6 +572,25 @@ TEST(FirstDownCrossingTest, UpCrossingIsNeverReturned) {
   EXPECT_EQ(FirstDown(q, 0.7, 1.0), kInf);  // up at 0.9 only
 }
 
+// The Bernstein proof on hand-made cases: a clear minimum is proved, one at the margin's scale
+// or below zero is not, and neither is a touch (a double root) nor a root at an end.
+TEST(ProvablyPositiveTest, ProvesClearMinimaOnly) {
+  const auto proved = [](const Poly& p, double hi) {
+    return ProvablyPositive(p.c.data(), p.degree, hi);
+  };
+  EXPECT_TRUE(proved(FromCoeffs({0.55, -1.0, 1.0}), 1.0));          // (x - 0.5)^2 + 0.3
+  // (x - 0.5)^2 + 0.01 > 0 too, but its control polygon dips below zero: not proved (a bound).
+  EXPECT_FALSE(proved(FromCoeffs({0.26, -1.0, 1.0}), 1.0));
+  EXPECT_TRUE(proved(FromCoeffs({1.0, 2.0, 3.0, 4.0, 5.0}), 10.0));  // all coefficients > 0
+  EXPECT_TRUE(proved(FromCoeffs({2.0, 0.0, -1.0, 0.0, 0.25}), 1.5));  // (x^2 - 2)^2 / 4 + 1
+  EXPECT_FALSE(proved(FromCoeffs({0.25 - 1e-14, -1.0, 1.0}), 1.0));   // min just below zero
+  EXPECT_FALSE(proved(FromCoeffs({0.25, -1.0, 1.0}), 1.0));           // a touch at 0.5
+  EXPECT_FALSE(proved(FromCoeffs({0.25 + 1e-15, -1.0, 1.0}), 1.0));   // min below the margin
+  EXPECT_FALSE(proved(FromRoots({2.0, 3.0}), 2.0));                   // a root at the end
+  EXPECT_FALSE(proved(FromCoeffs({-1.0, 0.0, 5.0}), 1.0));            // negative at 0
+  EXPECT_FALSE(proved(FromCoeffs({1.0, kInf}), 1.0));                 // not finite
+}
+
 // Pairs of balls passing near each other (the engine's common case: a neighbour moving apart,
 // or missing by a little): whether a contact is found must match the quartic's true minimum
 // over the window, computed from the real roots of p' by Eigen. FirstDownCrossing skips the
@@ -580,7 +599,7 @@ TEST(FirstDownCrossingTest, UpCrossingIsNeverReturned) {
 TEST(FirstDownCrossingTest, NearMissesAndNearHitsAgainstTheTrueMinimum) {
   std::mt19937_64 rng(0x6e6172);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  int hits = 0, misses = 0;
+  int hits = 0, misses = 0, proofs = 0;
   for (int trial = 0; trial < 20000; ++trial) {
     // Relative position 2R plus a gap of 1 nm to 10 cm, speeds up to 5 m/s, accelerations of
     // the cloth (up to 5 m/s^2), windows of 1 ms to 2 s.
@@ -611,6 +630,13 @@ TEST(FirstDownCrossingTest, NearMissesAndNearHitsAgainstTheTrueMinimum) {
     double scale = 0.0;
     for (int k = 0; k <= 4; ++k) scale = std::max(scale, std::abs(c[k]) * std::pow(S, k));
     const double x = FirstDownCrossing(c, 4, 0.0, S);
+    const bool proved = ProvablyPositive(c, 4, S);
+    if (proved) {
+      // A proof of p > 0 must never meet a p that goes negative (or a crossing found).
+      EXPECT_GT(lowest, 0.0) << "trial " << trial << ": proved positive, min " << lowest;
+      EXPECT_EQ(x, kInf) << "trial " << trial;
+      ++proofs;
+    }
     if (lowest > 1e-9 * scale) {
       EXPECT_EQ(x, kInf) << "trial " << trial << ": p > 0 on the window, min " << lowest;
       ++misses;
@@ -621,10 +647,13 @@ TEST(FirstDownCrossingTest, NearMissesAndNearHitsAgainstTheTrueMinimum) {
       ++hits;
     }
   }
-  // Both kinds must be well represented for the test to mean anything.
+  // Both kinds must be well represented for the test to mean anything, and the early-out must
+  // answer most misses (it is what makes them cheap).
   EXPECT_GT(hits, 2000);
   EXPECT_GT(misses, 2000);
-  std::printf("near passes: %d contacts, %d misses checked\n", hits, misses);
+  EXPECT_GT(proofs, misses / 2);
+  std::printf("near passes: %d contacts, %d misses checked, %d proved positive\n", hits, misses,
+              proofs);
 }
 
 // ---------------------------------------------------------------------------------------------
