@@ -92,7 +92,9 @@ int Run() {
   config.tables.world.clock_rate = absl::GetFlag(FLAGS_clock_rate);
   config.sessions.world.max_worlds = m + 1;
   config.sessions.world.clock_rate = absl::GetFlag(FLAGS_clock_rate);
-  if (!absl::GetFlag(FLAGS_session_checkpoints)) config.sessions.checkpoint_every_swings = 0;
+  if (!absl::GetFlag(FLAGS_session_checkpoints)) {
+    config.sessions.world.checkpoint_every_runs = 0;
+  }
   config.store.data_dir = dir.string();
   config.store.postgres_uri = absl::GetFlag(FLAGS_store);
   config.store.node = "restore-bench";
@@ -192,7 +194,7 @@ int Run() {
   if (m > 0) {
     const std::string every =
         absl::GetFlag(FLAGS_session_checkpoints)
-            ? absl::StrFormat("every %d swings", config.sessions.checkpoint_every_swings)
+            ? absl::StrFormat("every %d swings", config.sessions.world.checkpoint_every_runs)
             : "off";
     std::printf("sessions %d, swings per session %d, checkpoints %s, store %s\n", m, swings,
                 every.c_str(), (*again)->journal()->Describe().c_str());

@@ -239,31 +239,6 @@ void ExpireShotClock(Table& t, std::vector<EventPtr>* fresh) ABSL_EXCLUSIVE_LOCK
 
 namespace {
 
-// A checkpoint every few shots bounds what a restore replays (at most this many shots, each
-// ~0.1 ms) while keeping what is written per shot small: a checkpoint holds the match record,
-// ~200 bytes a shot, so writing one every shot would cost O(shots^2) bytes over a match.
-constexpr uint64_t kCheckpointEveryShots = 4;
-
-// At rest after a shot's end: the table as a checkpoint covering its journal so far.
-void Checkpoint(TableHost& host, Table& t) ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
-  Journal* journal = host.journal();
-  if (journal == nullptr || t.restoring || t.sim != nullptr ||
-      t.shots % kCheckpointEveryShots != 0) {
-    return;
-  }
-  const TableRestState state{.tick = t.tick,
-                             .sequence = t.sequence,
-                             .turn = t.turn,
-                             .rest = t.rest,
-                             .last_shot = t.last_shot,
-                             .shots = t.shots,
-                             .game = t.game,
-                             .placed = t.placed,
-                             .clock_deadline = t.clock_deadline,
-                             .record = t.record};
-  journal->Checkpoint(t.id, t.journal_index, t.tick, EncodeTableRestState(state));
-}
-
 // A restore from a checkpoint: the table at rest as it was.
 absl::Status LoadCheckpoint(Table& t, const std::string& bytes)
     ABSL_EXCLUSIVE_LOCKS_REQUIRED(t.mu) {
@@ -312,7 +287,21 @@ void TableKind::Publish(TableHost& /*host*/, Table& t, TickOut* out,
 void TableKind::EndRun(TableHost& host, Table& t, const End& end, std::vector<EventPtr>* fresh,
                        Table::Pump* /*pump*/) {
   EndShot(host, t, t.tick, end, fresh);
-  Checkpoint(host, t);
+}
+
+uint64_t TableKind::Runs(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS { return t.shots; }
+
+std::string TableKind::Checkpoint(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+  return EncodeTableRestState(TableRestState{.tick = t.tick,
+                                             .sequence = t.sequence,
+                                             .turn = t.turn,
+                                             .rest = t.rest,
+                                             .last_shot = t.last_shot,
+                                             .shots = t.shots,
+                                             .game = t.game,
+                                             .placed = t.placed,
+                                             .clock_deadline = t.clock_deadline,
+                                             .record = t.record});
 }
 
 std::optional<int64_t> TableKind::RestDeadline(const Table& t) ABSL_NO_THREAD_SAFETY_ANALYSIS {

@@ -43,7 +43,11 @@
 namespace sportsim::server {
 
 struct TableLimits {
-  WorldLimits world;          ///< limits every kind of world has (max_worlds: --max_tables)
+  /// Limits every kind of world has (max_worlds: --max_tables). A checkpoint every few shots
+  /// bounds what a restore replays (at most this many shots, each ~0.1 ms) while keeping what
+  /// is written per shot small: a checkpoint holds the match record, ~200 bytes a shot, so
+  /// writing one every shot would cost O(shots^2) bytes over a match.
+  WorldLimits world{.checkpoint_every_runs = 4};
   double max_shot_s = 600.0;  ///< simulated time after which a shot is stopped
 };
 
@@ -192,6 +196,10 @@ struct TableKind {
   /// The shot clock ran out: the game's penalty.
   static void AtRestDeadline(TableHost& host, Table& t,
                              std::vector<std::shared_ptr<const v1::TableEvent>>* fresh);
+  /// Shots struck so far.
+  static uint64_t Runs(const Table& t);
+  /// The table at rest as a journal checkpoint (table_checkpoint.h).
+  static std::string Checkpoint(const Table& t);
 };
 
 /// A table's commands in the journal (JournalEntry::type; the creation is 0). Stored: never

@@ -24,8 +24,7 @@ inline constexpr uint32_t kSessionCheckpointVersion = 1;
 /// A session at rest: the world's tick and sequence, and the members of SessionKind::Data
 /// guarded by its mutex that hold between swings. Not stored, because they are derived or hold
 /// nothing at rest: model (made again from params and the creation's disabled effects), live
-/// and driver (null: no swing in flight, no driver attached), checkpointed_swings (the swings
-/// of the checkpoint itself, once loaded).
+/// and driver (null: no swing in flight, no driver attached).
 struct SessionRestState {
   int64_t tick = 0;
   uint64_t sequence = 0;

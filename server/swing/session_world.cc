@@ -134,34 +134,6 @@ std::shared_ptr<SwingWatcher> EndSwing(SessionHost& host, Session& s, const sw::
   return std::move(s.driver);
 }
 
-// At rest (a swing just ended, or a reset), once checkpoint_every_swings swings have started
-// since the last checkpoint: the session as a checkpoint covering its journal so far. Swings
-// ended by a reset count too, so a client that always resets mid-swing still gets them. Not
-// while it is replayed: its checkpoint is in the store already, or will be at its next live
-// rest.
-void Checkpoint(SessionHost& host, Session& s) ABSL_EXCLUSIVE_LOCKS_REQUIRED(s.mu) {
-  Journal* journal = host.journal();
-  if (journal == nullptr || s.restoring || s.live != nullptr ||
-      s.checkpoint_every_swings == 0 ||
-      s.swings - s.checkpointed_swings < s.checkpoint_every_swings) {
-    return;
-  }
-  s.checkpointed_swings = s.swings;
-  const SessionRestState state{.tick = s.tick,
-                               .sequence = s.sequence,
-                               .params = s.params,
-                               .phase = s.phase,
-                               .swings = s.swings,
-                               .start_tick = s.start_tick,
-                               .seat = s.seat,
-                               .state = s.state,
-                               .qalpha = s.qalpha,
-                               .qbeta = s.qbeta,
-                               .last_impact = s.last_impact,
-                               .last_end_reason = s.last_end_reason};
-  journal->Checkpoint(s.id, s.journal_index, s.tick, EncodeSessionRestState(state));
-}
-
 // A restore from a checkpoint: the session at rest as it was, its golfer made again from the
 // parameters (as MakeSession and ResetOn make it).
 absl::Status LoadCheckpoint(Session& s, const std::string& bytes)
@@ -190,7 +162,6 @@ absl::Status LoadCheckpoint(Session& s, const std::string& bytes)
   s.qbeta = state->qbeta;
   s.last_impact = state->last_impact;
   s.last_end_reason = std::move(state->last_end_reason);
-  s.checkpointed_swings = s.swings;
   return absl::OkStatus();
 }
 
@@ -274,7 +245,23 @@ void SessionKind::EndRun(SessionHost& host, Session& s, const End& end,
     driver->Offer(s.MakeFrame(s.tick, false, true), *fresh);
     if (driver->Close(absl::OkStatus(), nullptr)) pump->push_back(driver);
   }
-  Checkpoint(host, s);
+}
+
+uint64_t SessionKind::Runs(const Session& s) ABSL_NO_THREAD_SAFETY_ANALYSIS { return s.swings; }
+
+std::string SessionKind::Checkpoint(const Session& s) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+  return EncodeSessionRestState(SessionRestState{.tick = s.tick,
+                                                 .sequence = s.sequence,
+                                                 .params = s.params,
+                                                 .phase = s.phase,
+                                                 .swings = s.swings,
+                                                 .start_tick = s.start_tick,
+                                                 .seat = s.seat,
+                                                 .state = s.state,
+                                                 .qalpha = s.qalpha,
+                                                 .qbeta = s.qbeta,
+                                                 .last_impact = s.last_impact,
+                                                 .last_end_reason = s.last_end_reason});
 }
 
 std::shared_ptr<const SwingFrame> SessionKind::MakeFrame(const Session& s, int64_t k,
@@ -363,7 +350,6 @@ absl::StatusOr<v1::CreateSessionResponse> SessionRegistry::MakeSession(
 
   Session* const session = &made;
   session->counters = &counters_;
-  session->checkpoint_every_swings = limits_.checkpoint_every_swings;
   session->strike = std::move(strike);
   session->tick_hz = tick_hz;
   session->period_s = 1.0 / tick_hz;
@@ -630,7 +616,6 @@ absl::StatusOr<v1::ResetSwingResponse> SessionRegistry::ResetOn(
   v1::SwingEvent e = SwingEvent(v1::SWING_EVENT_RESET, 0.0, s.swings, tick);
   e.set_seat(static_cast<uint32_t>(seat));
   fresh.push_back(s.Log(std::move(e)));
-  Checkpoint(host_, s);
   host_.CountEvents(fresh.size());
   s.OfferFrameAt(tick, fresh, &pump);
   if (driver != nullptr) {

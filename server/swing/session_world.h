@@ -40,13 +40,11 @@
 namespace sportsim::server {
 
 struct SessionLimits {
-  WorldLimits world{.event_log = 256};  ///< max_worlds: --max_sessions
-  int max_pending_commands = 1024;      ///< a driver's queued (future) torque commands
-  /// With a journal, a checkpoint at the end of every this many swings (0: none, and a restore
-  /// replays every swing since the creation). A checkpoint is ~330 bytes at any age, one more
-  /// store write, and a swing replays in ~30 us: every 8th bounds a restore to 8 swings
-  /// (~0.25 ms) for ~40 bytes more written per swing.
-  uint64_t checkpoint_every_swings = 8;
+  /// max_worlds: --max_sessions. A checkpoint is ~330 bytes at any age, one more store write,
+  /// and a swing replays in ~30 us: one every 8 swings bounds a restore to 8 swings (~0.25 ms)
+  /// for ~40 bytes more written per swing.
+  WorldLimits world{.event_log = 256, .checkpoint_every_runs = 8};
+  int max_pending_commands = 1024;  ///< a driver's queued (future) torque commands
 };
 
 /// Counters of the driven swings' commands, shared by a registry's sessions.
@@ -119,7 +117,6 @@ struct SessionKind {
     bool realistic = true;
     std::optional<StrikeJob> strike;  ///< CreateSession's `ball`: launched at each impact
     CommandCounters* counters = nullptr;
-    uint64_t checkpoint_every_swings = 0;  ///< SessionLimits'
     // Guarded by mu.
     v1::SwingParameters params;  ///< as asked (echoed by GetSession; Reset may change it)
     std::shared_ptr<const swing::SwingModel> model;  ///< at the address position
@@ -133,9 +130,6 @@ struct SessionKind {
     double qalpha = 0, qbeta = 0;            ///< in force at `state`
     std::optional<swing::SwingSample> last_impact;
     std::string last_end_reason;
-    /// `swings` when the last checkpoint was written or loaded (bookkeeping, not state: a
-    /// checkpoint does not hold it).
-    uint64_t checkpointed_swings = 0;
   };
   /// One wake's swing events, and the ball launched at an impact (computed off the lock).
   struct TickOut {
@@ -158,6 +152,10 @@ struct SessionKind {
   static std::optional<int64_t> RestDeadline(const Session&) { return std::nullopt; }
   static void AtRestDeadline(SessionHost&, Session&,
                              std::vector<std::shared_ptr<const v1::SwingEvent>>*) {}
+  /// Swings started so far.
+  static uint64_t Runs(const Session& s);
+  /// The session at rest as a journal checkpoint (session_checkpoint.h).
+  static std::string Checkpoint(const Session& s);
 };
 
 /// One DriveSwing stream's hold on its session.

@@ -24,6 +24,8 @@
 //   static std::optional<int64_t> RestDeadline(const World<Kind>&);  // at rest: a tick at
 //                                     // which something is due (a shot clock), if any
 //   static void AtRestDeadline(Host&, World<Kind>&, std::vector<EventPtr>* fresh);  // it is due
+//   static uint64_t Runs(const World<Kind>&);  // runs started so far (shots, swings)
+//   static std::string Checkpoint(const World<Kind>&);  // the world at rest, encoded
 //
 // Locks: WorldHost::mu_ -> World::mu -> Watcher::mu_ -> TickScheduler::mu_ (never the other
 // way). Sinks are pumped only with no lock held.
@@ -73,6 +75,9 @@ struct WorldLimits {
   /// Table time per wall-clock time: 1 is real time; more runs every world of the host faster
   /// (tests, bots). Outcomes depend on ticks only, never on this.
   double clock_rate = 1.0;
+  /// With a journal, a world at rest writes a checkpoint (Kind::Checkpoint) once this many
+  /// runs have started since its last one (0: never; a restore replays from the creation).
+  uint64_t checkpoint_every_runs = 0;
 };
 
 /// Counters of one kind of world (monotonic totals, and the current counts).
@@ -141,6 +146,7 @@ struct World final : Ticked, Kind::Data, std::enable_shared_from_this<World<Kind
   std::optional<int64_t> pinned_tick ABSL_GUARDED_BY(mu);  ///< a command's tick while it
                                                            ///< commits and takes effect
   uint64_t journal_index ABSL_GUARDED_BY(mu) = 0;  ///< the world's last journal entry
+  uint64_t checkpointed_runs ABSL_GUARDED_BY(mu) = 0;  ///< Kind::Runs at the last checkpoint
 
   /// UNAVAILABLE while shutting down, NOT_FOUND once deleted.
   absl::Status Gone() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu) {
@@ -375,6 +381,7 @@ class WorldHost {
   /// After a call's function: the command's tick is released, and a wake skipped while it
   /// committed is made up for.
   void AfterCall(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    MaybeCheckpoint(w);  // a call may have ended a run (a reset) or changed the world at rest
     w.pinned_tick.reset();
     if (w.wake_skipped) {
       w.wake_skipped = false;
@@ -678,6 +685,7 @@ class WorldHost {
         }
         w.log.MarkEvicted(w.sequence);
         w.journal_index = stored.checkpoint_index;
+        w.checkpointed_runs = Kind::Runs(w);
       }
       for (const JournalEntry& e : stored.entries) {
         if (e.index <= w.journal_index) continue;
@@ -950,6 +958,21 @@ class WorldHost {
   void EndRun(WorldT& w, const typename Kind::End& end, std::vector<EventPtr>* fresh, Pump* pump)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     Kind::EndRun(*this, w, end, fresh, pump);
+    MaybeCheckpoint(w);
+  }
+
+  // A checkpoint of w at rest, covering its journal so far, once checkpoint_every_runs runs
+  // have started since the last one: at a run's end, or after a call (however the last run
+  // ended, a reset included). Not while w is replayed: its checkpoint is in the store already,
+  // or will be at its next live rest.
+  void MaybeCheckpoint(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
+    const uint64_t every = limits_.checkpoint_every_runs;
+    if (journal_ == nullptr || every == 0 || w.restoring || Kind::Running(w) ||
+        Kind::Runs(w) - w.checkpointed_runs < every) {
+      return;
+    }
+    w.checkpointed_runs = Kind::Runs(w);
+    journal_->Checkpoint(w.id, w.journal_index, w.tick, Kind::Checkpoint(w));
   }
 
   // Stage 7: each reader due (its own rate, or the run's end) gets the one shared frame of

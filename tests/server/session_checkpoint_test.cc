@@ -62,7 +62,7 @@ static_assert(CountFields<sw::SwingSample>() == 15, "SwingSample changed: update
 static_assert(CountFields<SessionRestState>() == 12,
               "SessionRestState changed: update the checkpoint");
 // Every member of a live session, stored or derived (session_checkpoint.h).
-static_assert(CountFields<SessionKind::Data>() == 20,
+static_assert(CountFields<SessionKind::Data>() == 18,
               "SessionKind::Data changed: store the new member in the checkpoint, or say in "
               "session_checkpoint.h why it need not be");
 
@@ -179,7 +179,7 @@ constexpr uint64_t kEvery = 3;  // swings between checkpoints in these tests
 SessionLimits Limits() {
   SessionLimits limits;
   limits.world.clock_rate = 10;  // swings take a tenth of their time
-  limits.checkpoint_every_swings = kEvery;
+  limits.world.checkpoint_every_runs = kEvery;
   return limits;
 }
 
