@@ -7,6 +7,8 @@
 #include "google/protobuf/descriptor.h"
 #include "google/protobuf/message.h"
 #include "google/protobuf/unknown_field_set.h"
+#include "google/protobuf/util/field_comparator.h"
+#include "google/protobuf/util/message_differencer.h"
 
 namespace sportsim::server::checkpoint {
 
@@ -159,85 +161,55 @@ bool Differ::Size(const std::string& path, size_t a, size_t b) {
   return !found();
 }
 
+namespace {
+
+// Doubles and floats by their bits (-0.0 is not 0.0, NaNs differ by payload); every other
+// field as MessageDifferencer compares it.
+class BitsComparator final : public pb::util::SimpleFieldComparator {
+ public:
+  ComparisonResult Compare(const pb::Message& a, const pb::Message& b,
+                           const pb::FieldDescriptor* f, int index_a, int index_b,
+                           const pb::util::FieldContext* context) override {
+    const pb::Reflection* ra = a.GetReflection();
+    const pb::Reflection* rb = b.GetReflection();
+    const bool rep = f->is_repeated();
+    switch (f->cpp_type()) {
+      case pb::FieldDescriptor::CPPTYPE_DOUBLE: {
+        const double x = rep ? ra->GetRepeatedDouble(a, f, index_a) : ra->GetDouble(a, f);
+        const double y = rep ? rb->GetRepeatedDouble(b, f, index_b) : rb->GetDouble(b, f);
+        return std::bit_cast<uint64_t>(x) == std::bit_cast<uint64_t>(y) ? SAME : DIFFERENT;
+      }
+      case pb::FieldDescriptor::CPPTYPE_FLOAT: {
+        const float x = rep ? ra->GetRepeatedFloat(a, f, index_a) : ra->GetFloat(a, f);
+        const float y = rep ? rb->GetRepeatedFloat(b, f, index_b) : rb->GetFloat(b, f);
+        return std::bit_cast<uint32_t>(x) == std::bit_cast<uint32_t>(y) ? SAME : DIFFERENT;
+      }
+      default:
+        return SimpleCompare(a, b, f, index_a, index_b, context);
+    }
+  }
+};
+
+}  // namespace
+
 void Differ::Same(const std::string& path, const pb::Message& a, const pb::Message& b) {
   if (found()) return;
-  const pb::Descriptor* d = a.GetDescriptor();
-  if (d != b.GetDescriptor()) {
-    first_ = absl::StrCat(path, ": ", d->full_name(), " vs ", b.GetDescriptor()->full_name());
+  if (a.GetDescriptor() != b.GetDescriptor()) {
+    first_ = absl::StrCat(path, ": ", a.GetDescriptor()->full_name(), " vs ",
+                          b.GetDescriptor()->full_name());
     return;
   }
-  const pb::Reflection* ra = a.GetReflection();
-  const pb::Reflection* rb = b.GetReflection();
-  using F = pb::FieldDescriptor;
-  for (int i = 0; i < d->field_count() && !found(); ++i) {
-    const F* f = d->field(i);
-    const std::string p = Member(path, f->name());
-    if (!f->is_repeated()) {
-      if (f->has_presence()) {
-        Presence(p, ra->HasField(a, f), rb->HasField(b, f));
-        if (found() || !ra->HasField(a, f)) continue;
-      }
-      switch (f->cpp_type()) {
-        case F::CPPTYPE_INT32: Same(p, ra->GetInt32(a, f), rb->GetInt32(b, f)); break;
-        case F::CPPTYPE_INT64: Same(p, ra->GetInt64(a, f), rb->GetInt64(b, f)); break;
-        case F::CPPTYPE_UINT32: Same(p, ra->GetUInt32(a, f), rb->GetUInt32(b, f)); break;
-        case F::CPPTYPE_UINT64: Same(p, ra->GetUInt64(a, f), rb->GetUInt64(b, f)); break;
-        case F::CPPTYPE_BOOL: Same(p, ra->GetBool(a, f), rb->GetBool(b, f)); break;
-        case F::CPPTYPE_ENUM: Same(p, ra->GetEnumValue(a, f), rb->GetEnumValue(b, f)); break;
-        case F::CPPTYPE_DOUBLE: Bits(p, ra->GetDouble(a, f), rb->GetDouble(b, f)); break;
-        case F::CPPTYPE_FLOAT:
-          Same(p, std::bit_cast<uint32_t>(ra->GetFloat(a, f)),
-               std::bit_cast<uint32_t>(rb->GetFloat(b, f)));
-          break;
-        case F::CPPTYPE_STRING: Same(p, ra->GetString(a, f), rb->GetString(b, f)); break;
-        case F::CPPTYPE_MESSAGE: Same(p, ra->GetMessage(a, f), rb->GetMessage(b, f)); break;
-      }
-      continue;
-    }
-    const int n = ra->FieldSize(a, f);
-    if (!Size(p, static_cast<size_t>(n), static_cast<size_t>(rb->FieldSize(b, f)))) continue;
-    for (int k = 0; k < n && !found(); ++k) {
-      const std::string e = Index(p, static_cast<size_t>(k));
-      switch (f->cpp_type()) {
-        case F::CPPTYPE_INT32:
-          Same(e, ra->GetRepeatedInt32(a, f, k), rb->GetRepeatedInt32(b, f, k));
-          break;
-        case F::CPPTYPE_INT64:
-          Same(e, ra->GetRepeatedInt64(a, f, k), rb->GetRepeatedInt64(b, f, k));
-          break;
-        case F::CPPTYPE_UINT32:
-          Same(e, ra->GetRepeatedUInt32(a, f, k), rb->GetRepeatedUInt32(b, f, k));
-          break;
-        case F::CPPTYPE_UINT64:
-          Same(e, ra->GetRepeatedUInt64(a, f, k), rb->GetRepeatedUInt64(b, f, k));
-          break;
-        case F::CPPTYPE_BOOL:
-          Same(e, ra->GetRepeatedBool(a, f, k), rb->GetRepeatedBool(b, f, k));
-          break;
-        case F::CPPTYPE_ENUM:
-          Same(e, ra->GetRepeatedEnumValue(a, f, k), rb->GetRepeatedEnumValue(b, f, k));
-          break;
-        case F::CPPTYPE_DOUBLE:
-          Bits(e, ra->GetRepeatedDouble(a, f, k), rb->GetRepeatedDouble(b, f, k));
-          break;
-        case F::CPPTYPE_FLOAT:
-          Same(e, std::bit_cast<uint32_t>(ra->GetRepeatedFloat(a, f, k)),
-               std::bit_cast<uint32_t>(rb->GetRepeatedFloat(b, f, k)));
-          break;
-        case F::CPPTYPE_STRING:
-          Same(e, ra->GetRepeatedString(a, f, k), rb->GetRepeatedString(b, f, k));
-          break;
-        case F::CPPTYPE_MESSAGE:
-          Same(e, ra->GetRepeatedMessage(a, f, k), rb->GetRepeatedMessage(b, f, k));
-          break;
-      }
-    }
-  }
-  if (found()) return;
-  std::string ua, ub;
-  ra->GetUnknownFields(a).SerializeToString(&ua);
-  rb->GetUnknownFields(b).SerializeToString(&ub);
-  Same(Member(path, "(unknown fields)"), ua, ub);
+  std::string report;
+  bool same = false;
+  {
+    BitsComparator bits;
+    pb::util::MessageDifferencer differ;
+    differ.set_field_comparator(&bits);
+    differ.ReportDifferencesToString(&report);
+    same = differ.Compare(a, b);
+  }  // the report is complete once the differencer is gone
+  // Its first line: "modified: gravity_mps2: 0 -> -0", "added: gravity_mps2: 0", ...
+  if (!same) first_ = absl::StrCat(path, ": ", report.substr(0, report.find('\n')));
 }
 
 }  // namespace sportsim::server::checkpoint

@@ -110,8 +110,9 @@ class Differ {
   void Same(const std::string& path, const std::array<T, N>& a, const std::array<T, N>& b) {
     for (size_t i = 0; i < N; ++i) Same(Index(path, i), a[i], b[i]);
   }
-  /// Every field of two messages of one type, by reflection: presence, then the value (doubles
-  /// and floats by their bits), at any depth; unknown fields as their bytes.
+  /// Two messages of one type by MessageDifferencer (presence, every field at any depth,
+  /// unknown fields), doubles and floats by their bits; the difference is its first report
+  /// line ("params: modified: gravity_mps2: -0 -> 0").
   void Same(const std::string& path, const google::protobuf::Message& a,
             const google::protobuf::Message& b);
   /// False (and the difference noted) when the sizes differ.
