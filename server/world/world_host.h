@@ -451,13 +451,15 @@ class WorldHost {
       absl::StatusOr<int> seat = world->Authorize(token);
       if (!seat.ok()) return seat.status();
       if (absl::Status s = may_delete(*world, *seat); !s.ok()) return s;
+      absl::Status durable = absl::OkStatus();
       if (journal_ != nullptr) {
-        absl::Status durable = WaitDurable(*world, *seat, type, std::move(body), /*remove=*/true);
-        AfterCall(*world);
-        if (!durable.ok()) return durable;
+        durable = WaitDurable(*world, *seat, type, std::move(body), /*remove=*/true);
       }
-      // From here every other call finds the world gone (a second delete too).
-      world->deleted = true;
+      // From here every other call finds the world gone (a second delete too), and nothing of
+      // it is written again (no checkpoint after its removal).
+      if (durable.ok()) world->deleted = true;
+      AfterCall(*world);
+      if (!durable.ok()) return durable;
     }
     {
       absl::MutexLock lock(&mu_);
@@ -843,7 +845,6 @@ class WorldHost {
     return absl::OkStatus();
   }
 
-  // Stage 1: a wake for a world deleted, closed or scheduled again since is dropped.
   // The next journal entry of `w` at its tick now, made durable (`remove`: the world's deletion,
   // after which it leaves the store) with the world frozen: its lock is released only for the
   // wait, with `committing` set, so that no tick and no other call acts meanwhile.
@@ -866,6 +867,7 @@ class WorldHost {
     return durable;
   }
 
+  // Stage 1: a wake for a world deleted, closed or scheduled again since is dropped.
   static bool Superseded(const WorldT& w, uint64_t generation) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     return w.deleted || w.closed || w.restoring || generation != w.wake_generation;
   }
@@ -967,7 +969,7 @@ class WorldHost {
   // or will be at its next live rest.
   void MaybeCheckpoint(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     const uint64_t every = limits_.checkpoint_every_runs;
-    if (journal_ == nullptr || every == 0 || w.restoring || Kind::Running(w) ||
+    if (journal_ == nullptr || every == 0 || w.restoring || w.deleted || Kind::Running(w) ||
         Kind::Runs(w) - w.checkpointed_runs < every) {
       return;
     }

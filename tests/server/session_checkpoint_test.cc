@@ -403,6 +403,37 @@ TEST_F(SessionCheckpointTest, SwingsEndedByResetsAreCheckpointedToo) {
   }
 }
 
+// A session restored from its whole journal has no checkpoint yet, and its runs since then
+// are due one: the first call at rest writes it (C, a reset). A deletion is such a call too,
+// but nothing of a world is written after its removal (B): a checkpoint there would put a
+// world without a creation back in the store.
+TEST_F(SessionCheckpointTest, TheFirstCallAfterARestoreCheckpointsButADeletionDoesNot) {
+  SessionRegistry a(Limits(), nullptr, /*workers=*/1);
+  a.SetJournal(&journal_);
+  v1::CreateSessionResponse s;
+  ASSERT_EQ(Play(a, &s, 4).size(), 5u);
+  const std::string& id = s.session_id();
+  const StoredWorld whole = journal_.Stored(id, nullptr, Info(a, id).tick());
+  MemoryJournal journal_b, journal_c;
+  SessionRegistry b(Limits(), nullptr, /*workers=*/1);
+  SessionRegistry c(Limits(), nullptr, /*workers=*/1);
+  b.SetJournal(&journal_b);
+  c.SetJournal(&journal_c);
+  ASSERT_TRUE(b.Restore(whole).ok());
+  ASSERT_TRUE(c.Restore(whole).ok());
+  v1::ResetSwingRequest reset;
+  reset.set_session_id(id);
+  reset.set_token(s.token());
+  ASSERT_TRUE(c.Reset(reset).ok());
+  ASSERT_EQ(journal_c.checkpoints(id).size(), 1u);
+  EXPECT_EQ(Decoded(journal_c.checkpoints(id)[0]).swings, 4u);
+  v1::DeleteSessionRequest del;
+  del.set_session_id(id);
+  del.set_token(s.token());
+  ASSERT_TRUE(b.Delete(del).ok());
+  EXPECT_TRUE(journal_b.checkpoints(id).empty()) << "a checkpoint after the deletion";
+}
+
 TEST(SessionCheckpointValuesTest, EveryDoubleIsKeptBitForBit) {
   const std::vector<double> values = {
       0.0, -0.0, 1.0, -1.0, std::numeric_limits<double>::denorm_min(),
