@@ -345,12 +345,12 @@ class EventSimulation final : public TableSimulation {
   // The end of what can be predicted for ball i now.
   double Window(int i) const { return std::min(traj_[i].t_next, t_ + kPredictionHorizon); }
 
-  // Ball i (at P, V now) against ball j, looking at most `horizon` ahead.
-  // `now_only`, when given, is set when the answer holds only at this instant: the pair was
+  // Ball i (at P, V now, its path within `box` over its window) against ball j, looking at
+  // most `horizon` ahead. `now_only`, when given, is set when the answer holds only at this instant: the pair was
   // touching, so what was found depends on how close it is now (the contact now, or a threshold
   // below 2R for a pair that overlaps by rounding).
-  Pending PredictPair(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
-                      double horizon, bool* now_only = nullptr) const {
+  Pending PredictPair(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, const Box& box,
+                      int j, double horizon, bool* now_only = nullptr) const {
     const Trajectory& ti = traj_[i];
     const Trajectory& tj = traj_[j];
     Pending p{.kind = Kind::kBall, .a = std::min(i, j), .b = std::max(i, j)};
@@ -360,14 +360,14 @@ class EventSimulation final : public TableSimulation {
     if (ti.state == MotionState::kPocketed || tj.state == MotionState::kPocketed) return p;
     // Broad phase: i's path box from now and j's whole path box (it covers j from now on). The
     // margin covers touching pairs and the rounding of boxes made from different origins.
-    if (!Near(own_, tj.lo, tj.hi, d_ + kTouchGap + 1e-10)) return p;
+    if (!Near(box, tj.lo, tj.hi, d_ + kTouchGap + 1e-10)) return p;
     const double S = std::min(horizon, Window(j) - t_);
     const Eigen::Vector2d dp = PosAt(j, t_) - P;
     const Eigen::Vector2d dv = VelAt(j, t_) - V;
     const Eigen::Vector2d da = tj.a - ti.a;
     // Cull: the relative path's box must reach the disc of radius d around the origin.
-    const Box box = PathBox(dp, dv, da, S);
-    if (!Near(box, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), d_)) return p;
+    const Box relative = PathBox(dp, dv, da, S);
+    if (!Near(relative, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), d_)) return p;
     const double dist = dp.norm();
     if (dist == 0.0) return p;
     const double gap = dist - d_;
@@ -410,8 +410,8 @@ class EventSimulation final : public TableSimulation {
   // answer depends on the instant it was made, so it is not kept. A ball predicted after
   // its partner (the two balls of a collision, a group after a sustained contact, a ball whose
   // earliest event went stale) then solves only the pairs that changed.
-  Pending PairEvent(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
-                    double horizon) {
+  Pending PairEvent(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, const Box& box,
+                    int j, double horizon) {
     const int a = std::min(i, j), b = std::max(i, j);
     PairMemo& m = memo_[static_cast<size_t>(a) * n_ + b];
     const uint32_t va = traj_[a].version, vb = traj_[b].version;
@@ -420,7 +420,7 @@ class EventSimulation final : public TableSimulation {
       return Pending{.t = m.t, .kind = Kind::kBall, .a = a, .b = b, .va = va, .vb = vb};
     }
     bool now_only = false;
-    const Pending p = PredictPair(i, P, V, j, horizon, &now_only);
+    const Pending p = PredictPair(i, P, V, box, j, horizon, &now_only);
     m = now_only ? PairMemo{} : PairMemo{.t = p.t, .until = end, .va = va, .vb = vb};
     return p;
   }
@@ -548,12 +548,11 @@ class EventSimulation final : public TableSimulation {
       if (c.found() && c.Before(best)) best = c;
     };
     const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
-    own_ = Box{P, P};
-    if (IsTranslating(tr.state)) own_ = PathBox(P, V, tr.a, Window(i) - t_);
+    // Where i goes from now to the end of its window.
+    const Box box = IsTranslating(tr.state) ? PathBox(P, V, tr.a, Window(i) - t_) : Box{P, P};
     if (IsTranslating(tr.state) && model_.spec().bounded) {
       const double S = Window(i) - t_;
       const Eigen::Vector2d& A = tr.a;
-      const Box& box = own_;
       if (cushions_) {
         const int nc = static_cast<int>(model_.spec().cushions.size());
         for (int k = 0; k < nc; ++k) consider(PredictCushion(i, k, box, S, P, V, A));
@@ -570,7 +569,7 @@ class EventSimulation final : public TableSimulation {
     for (int j = 0; j < n_; ++j) {
       if (j == i) continue;
       const double horizon = std::min(Window(i), best.t) - t_;
-      consider(PairEvent(i, P, V, j, horizon));
+      consider(PairEvent(i, P, V, box, j, horizon));
     }
     best_[i] = best;
     if (best.found()) Push(best);
@@ -846,8 +845,7 @@ class EventSimulation final : public TableSimulation {
       for (size_t k = pass == 0 ? 0 : grown; k < cluster_.size(); ++k) {
         for (int j = 0; j < n_; ++j) {
           if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
-          const Eigen::Vector2d dp = pos_[j] - pos_[cluster_[k]];
-          if (dp.squaredNorm() < link2 && dp.norm() < link) {
+          if (linked(pos_[j] - pos_[cluster_[k]])) {
             Slot(j);
             cluster_moved_.push_back(0);
           }
@@ -1019,7 +1017,6 @@ class EventSimulation final : public TableSimulation {
     uint32_t va = 0, vb = 0;  // versions start at 1: an unused memo matches nothing
   };
   std::vector<PairMemo> memo_;
-  Box own_;  // the path box of the ball Predict works on, from now to its window's end
   std::vector<Pending> heap_;
   double t_;
   bool dirty_ = true;
