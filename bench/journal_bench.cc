@@ -79,7 +79,7 @@ void BM_DurableAppend(benchmark::State& state, Backend backend) {
   const uint64_t n = next_world.fetch_add(1);
   const std::string world = absl::StrFormat("t-%012x", n);
   const std::string body = Body(n);
-  const StoreStats before = StatsForTesting(**store);
+  const StoreStats before = (*store)->stats();
   uint64_t index = 0;
   for (auto _ : state) {
     ++index;
@@ -100,7 +100,7 @@ void BM_DurableAppend(benchmark::State& state, Backend backend) {
   if (state.thread_index() == 0) {
     // Over the whole run of every thread (approximately: threads end at slightly different
     // times).
-    const StoreStats after = StatsForTesting(**store);
+    const StoreStats after = (*store)->stats();
     const int64_t txns = after.batches - before.batches;
     state.counters["ops_per_txn"] =
         txns > 0 ? static_cast<double>(after.ops - before.ops) / static_cast<double>(txns) : 0.0;

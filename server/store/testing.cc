@@ -9,8 +9,6 @@ StoreInternals& Internals(Store& store) { return dynamic_cast<StoreInternals&>(s
 
 }  // namespace
 
-StoreStats StatsForTesting(Store& store) { return store.stats(); }
-
 absl::Status ExecForTesting(Store& store, const std::string& sql) {
   return Internals(store).ExecForTesting(sql);
 }

@@ -11,8 +11,6 @@
 
 namespace sportsim::server::store {
 
-/// The store's counters (Store::stats()).
-StoreStats StatsForTesting(Store& store);
 /// Runs `sql` on the store's own connection, between two batches (SQLite:
 /// "PRAGMA max_page_count = N" to make the disk look full).
 absl::Status ExecForTesting(Store& store, const std::string& sql);

@@ -239,7 +239,7 @@ TEST_P(StoreTest, ConcurrentAppendsAreAllDurableAndShareTransactions) {
   }
   for (std::thread& t : threads) t.join();
   EXPECT_EQ(failed.load(), 0);
-  const StoreStats stats = StatsForTesting(*store);
+  const StoreStats stats = store->stats();
   EXPECT_EQ(stats.ops, kThreads * kPerThread);
   EXPECT_LT(stats.batches, kThreads * kPerThread) << "appends were not committed together";
   std::cout << GetParam() << ": " << kThreads * kPerThread << " appends in " << stats.batches
@@ -394,7 +394,7 @@ TEST_F(SqliteStoreTest, AFailedCommitStoresNothingAndIsUnhealthyUntilOneSucceeds
   EXPECT_THAT(full.message(), HasSubstr(options_.data_dir + "/journal.db"));
   EXPECT_EQ(store.Healthy().code(), absl::StatusCode::kUnavailable);
   EXPECT_THAT(store.Healthy().message(), HasSubstr("SQLITE_FULL"));
-  EXPECT_EQ(StatsForTesting(store).failed_batches, 1);
+  EXPECT_EQ(store.stats().failed_batches, 1);
   absl::StatusOr<std::vector<StoredWorld>> worlds = store.Load();
   ASSERT_TRUE(worlds.ok()) << worlds.status();
   ASSERT_THAT(*worlds, SizeIs(1));
