@@ -60,6 +60,16 @@ inline constexpr double kMinRestingGap = 1e-9;
 /// is. A contact at or above kRestingContactSpeed ends every train of its balls.
 inline constexpr double kRestingTrain = 0.01;
 
+/// Inside a train (RestingContacts::kSustained: the pair's last plastic contact within
+/// kRestingTrain, and no collision of either ball since) a contact re-forms only because the
+/// cloth closed the resting gap, so it continues the sustained contact: it is plastic below this
+/// approach speed (m/s), not only below kRestingContactSpeed, and its resting gap is sized for
+/// it (up to kSustainedRestingGap: a push the cloth closes at 2-4 m/s^2, a sliding ball driving
+/// a group, re-forms 2-3 times less often than with gaps sized for kRestingContactSpeed). The
+/// approach of such a re-formation is sqrt(2 a gap) <= 2.8 mm/s for two sliding balls at
+/// mu_s = 0.2 (a = 2 mu_s g) and the largest gap.
+inline constexpr double kTrainContactSpeed = 5e-3;
+
 /// Predictions look at most this far ahead (s); a ball with nothing predicted within it is
 /// re-predicted then (a ball that barely slows: rolling resistance or spin decay off or tiny).
 inline constexpr double kPredictionHorizon = 1000.0;

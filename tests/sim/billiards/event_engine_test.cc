@@ -418,6 +418,47 @@ TEST(EventEngineTest, SlowPushMovesAFrozenLineTogether) {
   EXPECT_GE(LargestOverlap(m, out), -kSustainedRestingGap - 1e-12);
 }
 
+// A ball sliding with topspin pushes a rolling ball in line (rolling resistance and ball-ball
+// friction off, so the closed form is exact). A continuous contact force N would move both at
+// a = 5/12 mu_s g (N = 7/12 m mu_s g on a sliding ball of mass m and a rolling one of mass 7/5 m)
+// until the driver's slip s (-0.3 m/s) is gone, after t_e = -s / (35/12 mu_s g), and leave both
+// rolling at v0 - s/7. The pair's angular momentum about the cloth contacts, m R v + I w each,
+// is changed by neither the cloth (it acts at those points) nor the contact (equal and opposite
+// at equal heights), so whatever the contact treatment, the final rolling speeds average to
+// exactly v0 - s/7. The sustained contact re-forms a train of plastic contacts, each after the
+// cloth closed a resting gap of at most kSustainedRestingGap at mu_s g: no more of them than
+// t_e / sqrt(2 gap / (mu_s g)), and the pushed ball stays within 0.1 mm of the continuous one.
+TEST(EventEngineTest, SlidingPushMatchesTheContinuousContact) {
+  const TableModel m = Model("unbounded");
+  const PhysicsParams& p = m.params();
+  const double R = m.radius(), v0 = 0.3, s0 = -0.3, g = p.gravity_mps2, mu = p.mu_slide;
+  TableState s{.balls = {BallAt("a", 0, 0, m, {v0, 0, 0}, {0, (v0 - s0) / R, 0}),
+                         BallAt("b", 2 * R, 0, m, {v0, 0, 0}, {0, v0 / R, 0})}};
+  ASSERT_EQ(s.balls[0].state, MotionState::kSliding);
+  ASSERT_EQ(s.balls[1].state, MotionState::kRolling);
+  const SolverOptions o{.engine = Engine::kEvent,
+                        .effects = kEffectDisableRollingResistance | kEffectDisableBallFriction};
+  std::vector<Event> ev;
+  std::unique_ptr<TableSimulation> sim = Sim(m, o, s, &ev);
+  const double te = -s0 / (35.0 / 12.0 * mu * g), T = 2 * te;
+  ASSERT_TRUE(sim->AdvanceTo(T, &ev).ok());
+  const TableState& out = sim->state();
+  const double v_end = v0 - s0 / 7;
+  const double va = out.balls[0].v.x(), vb = out.balls[1].v.x();
+  EXPECT_EQ(out.balls[0].state, MotionState::kRolling);
+  EXPECT_EQ(out.balls[1].state, MotionState::kRolling);
+  EXPECT_NEAR(0.5 * (va + vb), v_end, 1e-12 * v_end);
+  EXPECT_NEAR(va - vb, 0.0, 1e-9);
+  const double xb = 2 * R + v0 * te + 5.0 / 24.0 * mu * g * te * te + v_end * (T - te);
+  const double bound = te / std::sqrt(2 * kSustainedRestingGap / (mu * g));
+  std::printf("sliding push: %lld events handled (bound %.0f), ball b %.2e m from the continuous "
+              "contact, speeds %.3e m/s apart\n",
+              static_cast<long long>(sim->events_processed()), bound,
+              out.balls[1].r.x() - xb, va - vb);
+  EXPECT_NEAR(out.balls[1].r.x(), xb, 1e-4);
+  EXPECT_LE(sim->events_processed(), 1.5 * bound + 10);
+}
+
 // The storm batch (bench/billiards_storms.h): 1000 seeded random shots from the tight 8-ball
 // rack, FastFiz's distribution (heading uniform, cue speed 0.5-4.5 m/s, elevation 5-30 deg, tip
 // offsets within +-10 mm). With sustained contacts the events handled per shot stay short
