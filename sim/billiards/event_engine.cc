@@ -35,6 +35,9 @@ constexpr int kGapPasses = 8;
 // A resting gap short of its size by less than this (m) is left as it is: what is left is
 // rounding, and chasing it made the passes run 5.3 times a group on the storm batch (3.9 now).
 constexpr double kGapSlack = 1e-12;
+// The gap passes check a move against the balls within this (m) of contact: moves are resting
+// gaps (at most 1 um each), so a list stays good for several.
+constexpr double kNearSlack = 4e-6;
 
 // The resting gap for a contact the cloth closes at `closing` m/s^2: re-forming from it, the
 // approach speed sqrt(2 closing gap) stays at 0.9 `plastic` or below (`plastic`: the speed
@@ -847,11 +850,28 @@ class EventSimulation final : public TableSimulation {
       pos_[j] = PosAt(j, t_);
       vel_[j] = VelAt(j, t_);
     }
-    // Whether ball i can move to p without coming closer than 2R to a ball other than
-    // `partner` to which it is not already closer.
-    const auto free = [&](int i, int partner, const Eigen::Vector2d& p) {
-      for (int j = 0; j < n_; ++j) {
-        if (j == i || j == partner || traj_[j].state == MotionState::kPocketed) continue;
+    // Whether the ball in slot k can move to p without coming closer than 2R to a ball other
+    // than `partner` to which it is not already closer. Only the balls that were within
+    // kNearSlack of contact when its list was made can be (the list holds while the shifts
+    // made since, all balls together, and this move add up to less than kNearSlack).
+    if (near_.size() < cluster_.size()) near_.resize(cluster_.size());
+    near_made_.assign(cluster_.size(), -1.0);
+    double shifted = 0.0;  // the length of every shift so far, summed
+    const auto free = [&](size_t k, int partner, const Eigen::Vector2d& p) {
+      const int i = cluster_[k];
+      const double move = (p - pos_[i]).norm();
+      const bool scan = near_made_[k] < 0.0 || shifted - near_made_[k] + move >= kNearSlack;
+      if (scan) {
+        near_[k].clear();
+        near_made_[k] = shifted;
+        const double reach = (d_ + kNearSlack) * (d_ + kNearSlack);
+        for (int j = 0; j < n_; ++j) {
+          if (j == i || traj_[j].state == MotionState::kPocketed) continue;
+          if ((pos_[j] - pos_[i]).squaredNorm() < reach) near_[k].push_back(j);
+        }
+      }
+      for (const int j : near_[k]) {
+        if (j == partner) continue;
         const double after = (pos_[j] - p).squaredNorm();
         if (after < d_ * d_ && after < (pos_[j] - pos_[i]).squaredNorm()) return false;
       }
@@ -862,6 +882,7 @@ class EventSimulation final : public TableSimulation {
       const int i = cluster_[k];
       MoveOrigin(i, by);
       pos_[i] += by;
+      shifted += by.norm();
     };
     size_t grown = 0;  // group members [0, grown) have been scanned for new neighbours
     for (int pass = 0; pass < kGapPasses; ++pass) {
@@ -873,6 +894,8 @@ class EventSimulation final : public TableSimulation {
           if (linked(pos_[j] - pos_[cluster_[k]])) {
             Slot(j);
             cluster_moved_.push_back(0);
+            near_made_.push_back(-1.0);
+            if (near_.size() < cluster_.size()) near_.resize(cluster_.size());
           }
         }
       }
@@ -894,12 +917,12 @@ class EventSimulation final : public TableSimulation {
           // ball (the pair then keeps its gap, and the queue resolves it if it closes).
           const bool mi = movable(i), mj = movable(j);
           const Eigen::Vector2d step = open * n;
-          if (mi && mj && free(i, j, pos_[i] - 0.5 * step) && free(j, i, pos_[j] + 0.5 * step)) {
+          if (mi && mj && free(k, j, pos_[i] - 0.5 * step) && free(q, i, pos_[j] + 0.5 * step)) {
             shift(k, -0.5 * step);
             shift(q, 0.5 * step);
-          } else if (mi && free(i, j, pos_[i] - step)) {
+          } else if (mi && free(k, j, pos_[i] - step)) {
             shift(k, -step);
-          } else if (mj && free(j, i, pos_[j] + step)) {
+          } else if (mj && free(q, i, pos_[j] + step)) {
             shift(q, step);
           } else {
             continue;
@@ -1066,6 +1089,8 @@ class EventSimulation final : public TableSimulation {
   std::vector<char> cluster_moved_;  // per slot: new trajectory set
   std::vector<Eigen::Vector2d> pos_, vel_;  // every ball's position and velocity at t_
   std::vector<char> changed_, changed_now_;  // per slot: velocity changed in a sweep
+  std::vector<std::vector<int>> near_;  // per slot: balls near contact (HandleSustained's free)
+  std::vector<double> near_made_;       // per slot: the shifts summed when near_ was made
   double last_sustained_t_ = -kNever;  // the last sustained contact's time and pair
   int last_sustained_a_ = -1, last_sustained_b_ = -1;
   const double gap_;  // the largest resting gap (m)
