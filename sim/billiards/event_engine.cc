@@ -725,6 +725,7 @@ class EventSimulation final : public TableSimulation {
     cluster_balls_.emplace_back();
     Eval(i, t_, &cluster_balls_.back());
     cluster_from_.push_back(cluster_balls_.back().state);
+    in_pair_.push_back(0);
     return static_cast<int>(cluster_.size()) - 1;
   }
 
@@ -742,11 +743,14 @@ class EventSimulation final : public TableSimulation {
     cluster_.clear();
     cluster_balls_.clear();
     cluster_from_.clear();
-    cluster_pairs_.clear();
-    // Positions now of every ball, for finding the group.
+    in_pair_.clear();
+    // Every ball's position and velocity now (the group's are updated below).
     pos_.resize(n_);
     vel_.resize(n_);
-    for (int j = 0; j < n_; ++j) pos_[j] = PosAt(j, t_);
+    for (int j = 0; j < n_; ++j) {
+      pos_[j] = PosAt(j, t_);
+      vel_[j] = VelAt(j, t_);
+    }
     // Within the largest resting gap (a cheap squared test first).
     const double link = d_ + gap_;
     const double link2 = link * link * (1.0 + 1e-9);
@@ -768,7 +772,7 @@ class EventSimulation final : public TableSimulation {
       } else {
         ++counts_.ball_ball_push;
       }
-      cluster_pairs_.push_back({i, j});
+      in_pair_[si] = in_pair_[sj] = 1;
     };
     resolve(ia, ib);
     // The group: every ball linked to the pair by gaps below the resting gap.
@@ -810,9 +814,8 @@ class EventSimulation final : public TableSimulation {
     }
     // A ball the group leaves creeping slower than RestingStopSpeed stops (its roll would end
     // within 1.4 ms, after 0.1 um).
-    for (const auto& [i, j] : cluster_pairs_) {
-      StopCreep(model_, o_.effects, &cluster_balls_[Slot(i)]);
-      StopCreep(model_, o_.effects, &cluster_balls_[Slot(j)]);
+    for (size_t k = 0; k < cluster_.size(); ++k) {
+      if (in_pair_[k]) StopCreep(model_, o_.effects, &cluster_balls_[k]);
     }
     for (size_t k = 0; k < cluster_.size(); ++k) {
       counts_.state_changes += cluster_balls_[k].state != cluster_from_[k];
@@ -827,10 +830,8 @@ class EventSimulation final : public TableSimulation {
         cluster_moved_[k] = 1;
       }
     };
-    for (const auto& [i, j] : cluster_pairs_) {
-      for (size_t k = 0; k < cluster_.size(); ++k) {
-        if (cluster_[k] == i || cluster_[k] == j) restart(k);
-      }
+    for (size_t k = 0; k < cluster_.size(); ++k) {
+      if (in_pair_[k]) restart(k);
     }
     // Resting gaps between the group's balls (each at least the gap that the pair's closing
     // acceleration allows, as after a plastic contact), in a few Gauss-Seidel passes. Moving
@@ -845,8 +846,9 @@ class EventSimulation final : public TableSimulation {
       return IsTranslating(traj_[i].state) ||
              (jammed && traj_[i].state != MotionState::kPocketed);
     };
-    // Every ball's position and velocity now, after the impulses (the passes move positions).
-    for (int j = 0; j < n_; ++j) {
+    // The group's positions and velocities after the impulses (the passes move positions;
+    // the other balls' are as they were).
+    for (const int j : cluster_) {
       pos_[j] = PosAt(j, t_);
       vel_[j] = VelAt(j, t_);
     }
@@ -953,16 +955,13 @@ class EventSimulation final : public TableSimulation {
     for (size_t k = 0; k < g; ++k) {
       if (cluster_moved_[k]) Predict(cluster_[k]);
     }
+    const auto moved = [&](int i) {
+      return i >= 0 && slot_of_[i] >= 0 && cluster_moved_[slot_of_[i]];
+    };
     for (int j = 0; j < n_; ++j) {
-      if (slot_of_[j] >= 0 && cluster_moved_[slot_of_[j]]) continue;
+      if (moved(j)) continue;
       const Pending& p = best_[j];
-      if (!p.found()) continue;
-      for (size_t k = 0; k < g; ++k) {
-        if (cluster_moved_[k] && p.Involves(cluster_[k])) {
-          Predict(j);
-          break;
-        }
-      }
+      if (p.found() && (moved(p.a) || moved(p.b))) Predict(j);
     }
   }
 
@@ -1085,8 +1084,8 @@ class EventSimulation final : public TableSimulation {
   std::vector<int> slot_of_;  // per ball: its slot in cluster_, or -1
   std::vector<Ball> cluster_balls_;
   std::vector<MotionState> cluster_from_;
-  std::vector<std::pair<int, int>> cluster_pairs_;
   std::vector<char> cluster_moved_;  // per slot: new trajectory set
+  std::vector<char> in_pair_;        // per slot: in a pair resolved (an impulse or a push)
   std::vector<Eigen::Vector2d> pos_, vel_;  // every ball's position and velocity at t_
   std::vector<char> changed_, changed_now_;  // per slot: velocity changed in a sweep
   std::vector<std::vector<int>> near_;  // per slot: balls near contact (HandleSustained's free)
