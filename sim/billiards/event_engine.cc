@@ -574,8 +574,13 @@ class EventSimulation final : public TableSimulation {
     // Pairs only up to the best found so far: ball i is predicted again by then anyway (its
     // best event is handled, or made stale by a change of i or its partner, and either way
     // Predict(i) runs), so a later contact would be thrown away.
+    const bool translating = IsTranslating(tr.state);
     for (int j = 0; j < n_; ++j) {
-      if (j == i) continue;
+      // Two balls that are not translating never meet (PredictPair's first cull, taken
+      // before the memo: most balls rest most of the time).
+      if (j == i || (!translating && !IsTranslating(traj_[j].state))) continue;
+      // And PredictPair's broad phase, also before the memo: the paths' boxes stay apart.
+      if (!Near(box, traj_[j].lo, traj_[j].hi, d_ + kTouchGap + 1e-10)) continue;
       const double horizon = std::min(Window(i), best.t) - t_;
       consider(PairEvent(i, P, V, box, j, horizon));
     }

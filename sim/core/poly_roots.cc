@@ -83,6 +83,26 @@ double PolyEval(const double* c, int degree, double x) {
 // the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
 // call passes has no sign change the search below could have found either: it only saves the
 // search. Most predictions in a billiards shot are such pairs (near, but moving apart).
+// C(i, k) / C(n, k) for every degree n, i <= n and k <= i (each the quotient of two exact
+// integers, rounded once).
+struct BernsteinRatios {
+  double r[kMaxPolyDegree + 1][kMaxPolyDegree + 1][kMaxPolyDegree + 1] = {};
+  constexpr BernsteinRatios() {
+    double c[kMaxPolyDegree + 1][kMaxPolyDegree + 1] = {};  // C(i, k)
+    for (int i = 0; i <= kMaxPolyDegree; ++i) {
+      c[i][0] = 1.0;
+      for (int k = 1; k <= i; ++k) c[i][k] = c[i - 1][k - 1] + (k < i ? c[i - 1][k] : 0.0);
+    }
+    for (int n = 0; n <= kMaxPolyDegree; ++n) {
+      for (int i = 0; i <= n; ++i) {
+        for (int k = 0; k <= i; ++k) r[n][i][k] = c[i][k] / c[n][k];
+      }
+    }
+  }
+  const auto& operator[](int n) const { return r[n]; }
+};
+constexpr BernsteinRatios kBernsteinRatios;
+
 bool ProvablyPositive(const double* c, int degree, double hi) {
   double a[kMaxPolyDegree + 1];  // p(hi t) = sum a_k t^k, t in [0, 1]
   double scale = 1.0, largest = 0.0;
@@ -94,15 +114,10 @@ bool ProvablyPositive(const double* c, int degree, double hi) {
   if (!(largest < std::numeric_limits<double>::infinity())) return false;
   const double margin = 1e-12 * largest;
   // b_i = sum_{k <= i} C(i, k) / C(n, k) a_k.
-  double binom_n[kMaxPolyDegree + 1];
-  binom_n[0] = 1.0;
-  for (int k = 1; k <= degree; ++k) binom_n[k] = binom_n[k - 1] * (degree - k + 1) / k;
+  const auto& ratio = kBernsteinRatios[degree];
   for (int i = 0; i <= degree; ++i) {
-    double b = 0.0, binom_i = 1.0;  // C(i, k)
-    for (int k = 0; k <= i; ++k) {
-      b += binom_i / binom_n[k] * a[k];
-      binom_i = binom_i * (i - k) / (k + 1);
-    }
+    double b = 0.0;
+    for (int k = 0; k <= i; ++k) b += ratio[i][k] * a[k];
     if (!(b > margin)) return false;
   }
   return true;
