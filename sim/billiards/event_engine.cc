@@ -26,7 +26,7 @@ constexpr double kTouchGap = 0.5 * kMinRestingGap;
 // pair that approaches); a pair still approaching after them is handled as a next event.
 constexpr int kSustainedSweeps = 32;
 // The sweeps stop resolving a pair approaching slower than this (m/s): the resting gap opened
-// after them (1 nm to 1 um) then takes 1 ms to 1 s to close at that speed, and the queue
+// after them (1 nm to 3 um) then takes 1 ms to 3 s to close at that speed, and the queue
 // handles it if it does. (10 um/s lets a snooker shot of the 10,000-shot test run to 18,890
 // events: trains of re-forming contacts; 1 um/s keeps every shot under 3,000.)
 constexpr double kSweepApproach = 1e-6;
@@ -36,8 +36,8 @@ constexpr int kGapPasses = 8;
 // rounding, and chasing it made the passes run 5.3 times a group on the storm batch (3.9 now).
 constexpr double kGapSlack = 1e-12;
 // The gap passes check a move against the balls within this (m) of contact: moves are resting
-// gaps (at most 1 um each), so a list stays good for several.
-constexpr double kNearSlack = 4e-6;
+// gaps (at most kSustainedRestingGap each), so a list stays good for several.
+constexpr double kNearSlack = 4 * kSustainedRestingGap;
 
 // The resting gap for a contact the cloth closes at `closing` m/s^2: re-forming from it, the
 // approach speed sqrt(2 closing gap) stays at 0.9 `plastic` or below (`plastic`: the speed
@@ -818,9 +818,27 @@ class EventSimulation final : public TableSimulation {
       changed_.swap(changed_now_);
     }
     // A ball the group leaves creeping slower than RestingStopSpeed stops (its roll would end
-    // within 1.4 ms, after 0.1 um).
+    // within 1.4 ms, after 0.1 um), unless a ball of the group would then close on it again:
+    // a ball still driven (a ball rolling on, wedged between two that it pushes apart) keeps
+    // its creep; stopped, it would be hit again at once, thousands of times.
+    const auto pressed = [&](size_t k) {
+      const Ball& bk = cluster_balls_[k];
+      for (size_t q = 0; q < cluster_.size(); ++q) {
+        if (q == k) continue;
+        const Ball& bq = cluster_balls_[q];
+        const Eigen::Vector2d dp = (bk.r - bq.r).head<2>();
+        if (!linked(dp)) continue;
+        const double dist = dp.norm();
+        if (dist > 0.0 && bq.v.head<2>().dot(dp / dist) > kSweepApproach) return true;
+      }
+      return false;
+    };
     for (size_t k = 0; k < cluster_.size(); ++k) {
-      if (in_pair_[k]) StopCreep(model_, o_.effects, &cluster_balls_[k]);
+      if (!in_pair_[k]) continue;
+      Ball stopped = cluster_balls_[k];
+      StopCreep(model_, o_.effects, &stopped);
+      if (stopped.state != cluster_balls_[k].state && pressed(k)) continue;
+      cluster_balls_[k] = stopped;
     }
     for (size_t k = 0; k < cluster_.size(); ++k) {
       counts_.state_changes += cluster_balls_[k].state != cluster_from_[k];
