@@ -790,29 +790,33 @@ class EventSimulation final : public TableSimulation {
     }
     // Sweeps over the group's touching pairs: each approaching one is resolved. Only pairs
     // with a ball whose velocity changed since the last sweep need a look.
+    // The group's linked pairs (slots k < q, in order); the sweeps change velocities only.
+    links_.clear();
+    for (size_t k = 0; k < cluster_.size(); ++k) {
+      for (size_t q = k + 1; q < cluster_.size(); ++q) {
+        if (linked((cluster_balls_[q].r - cluster_balls_[k].r).head<2>())) links_.push_back({k, q});
+      }
+    }
     changed_.assign(cluster_.size(), 0);
     changed_[0] = changed_[1] = 1;
     for (int sweep = 0; sweep < kSustainedSweeps; ++sweep) {
       ++counts_.sustained_sweeps;
       bool any = false;
       changed_now_.assign(cluster_.size(), 0);
-      for (size_t k = 0; k < cluster_.size(); ++k) {
-        for (size_t q = k + 1; q < cluster_.size(); ++q) {
-          if (!changed_[k] && !changed_[q] && !changed_now_[k] && !changed_now_[q]) continue;
-          const Ball& bk = cluster_balls_[k];
-          const Ball& bq = cluster_balls_[q];
-          const Eigen::Vector2d dp = (bq.r - bk.r).head<2>();
-          if (!linked(dp)) continue;
-          const double dist = dp.norm();
-          if (!(dist > 0.0)) continue;
-          const double approach = (bk.v - bq.v).head<2>().dot(dp / dist);
-          if (approach <= kSweepApproach) continue;
-          const int i = cluster_[k], j = cluster_[q];
-          if (approach >= PlasticBelow(i, j)) continue;
-          resolve(std::min(i, j), std::max(i, j));
-          changed_now_[k] = changed_now_[q] = 1;
-          any = true;
-        }
+      for (const auto& [k, q] : links_) {
+        if (!changed_[k] && !changed_[q] && !changed_now_[k] && !changed_now_[q]) continue;
+        const Ball& bk = cluster_balls_[k];
+        const Ball& bq = cluster_balls_[q];
+        const Eigen::Vector2d dp = (bq.r - bk.r).head<2>();
+        const double dist = dp.norm();
+        if (!(dist > 0.0)) continue;
+        const double approach = (bk.v - bq.v).head<2>().dot(dp / dist);
+        if (approach <= kSweepApproach) continue;
+        const int i = cluster_[k], j = cluster_[q];
+        if (approach >= PlasticBelow(i, j)) continue;
+        resolve(std::min(i, j), std::max(i, j));
+        changed_now_[k] = changed_now_[q] = 1;
+        any = true;
       }
       if (!any) break;
       changed_.swap(changed_now_);
@@ -910,8 +914,13 @@ class EventSimulation final : public TableSimulation {
       shifted += by.norm();
     };
     size_t grown = 0;  // group members [0, grown) have been scanned for new neighbours
+    // The pairs the passes look at: within kNearSlack of linked when listed (slots k < q, in
+    // order), which holds every linked pair while the shifts since add up to less.
+    double links_made = -kNever;
+    const double reach = (link + kNearSlack) * (link + kNearSlack);
     for (int pass = 0; pass < kGapPasses; ++pass) {
       bool moved = false;
+      const size_t before = cluster_.size();
       // A ball within the resting gap of the group joins it.
       for (size_t k = pass == 0 ? 0 : grown; k < cluster_.size(); ++k) {
         for (int j = 0; j < n_; ++j) {
@@ -926,34 +935,43 @@ class EventSimulation final : public TableSimulation {
       }
       grown = cluster_.size();
       const size_t g = cluster_.size();
-      for (size_t k = 0; k < g; ++k) {
-        for (size_t q = k + 1; q < g; ++q) {
-          const int i = cluster_[k], j = cluster_[q];
-          const Eigen::Vector2d dp = pos_[j] - pos_[i];
-          if (!(dp.squaredNorm() < link2)) continue;
-          const double dist = dp.norm();
-          if (!(dist > 0.0) || dist >= link) continue;
-          const Eigen::Vector2d n = dp / dist;
-          if ((vel_[j] - vel_[i]).dot(n) >= kRestingContactSpeed) continue;
-          const double open =
-              d_ + RestingGap(-(traj_[j].a - traj_[i].a).dot(n), gap_, PlasticBelow(i, j)) - dist;
-          if (!(open > kGapSlack)) continue;
-          // Both move half the way, or one all of it; never into a deeper overlap with a third
-          // ball (the pair then keeps its gap, and the queue resolves it if it closes).
-          const bool mi = movable(i), mj = movable(j);
-          const Eigen::Vector2d step = open * n;
-          if (mi && mj && free(k, j, pos_[i] - 0.5 * step) && free(q, i, pos_[j] + 0.5 * step)) {
-            shift(k, -0.5 * step);
-            shift(q, 0.5 * step);
-          } else if (mi && free(k, j, pos_[i] - step)) {
-            shift(k, -step);
-          } else if (mj && free(q, i, pos_[j] + step)) {
-            shift(q, step);
-          } else {
-            continue;
+      if (pass == 0 || g != before || shifted - links_made >= kNearSlack) {
+        links_made = shifted;
+        links_.clear();
+        for (size_t k = 0; k < g; ++k) {
+          for (size_t q = k + 1; q < g; ++q) {
+            if ((pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach) {
+              links_.push_back({k, q});
+            }
           }
-          moved = true;
         }
+      }
+      for (const auto& [k, q] : links_) {
+        const int i = cluster_[k], j = cluster_[q];
+        const Eigen::Vector2d dp = pos_[j] - pos_[i];
+        if (!(dp.squaredNorm() < link2)) continue;
+        const double dist = dp.norm();
+        if (!(dist > 0.0) || dist >= link) continue;
+        const Eigen::Vector2d n = dp / dist;
+        if ((vel_[j] - vel_[i]).dot(n) >= kRestingContactSpeed) continue;
+        const double open =
+            d_ + RestingGap(-(traj_[j].a - traj_[i].a).dot(n), gap_, PlasticBelow(i, j)) - dist;
+        if (!(open > kGapSlack)) continue;
+        // Both move half the way, or one all of it; never into a deeper overlap with a third
+        // ball (the pair then keeps its gap, and the queue resolves it if it closes).
+        const bool mi = movable(i), mj = movable(j);
+        const Eigen::Vector2d step = open * n;
+        if (mi && mj && free(k, j, pos_[i] - 0.5 * step) && free(q, i, pos_[j] + 0.5 * step)) {
+          shift(k, -0.5 * step);
+          shift(q, 0.5 * step);
+        } else if (mi && free(k, j, pos_[i] - step)) {
+          shift(k, -step);
+        } else if (mj && free(q, i, pos_[j] + step)) {
+          shift(q, step);
+        } else {
+          continue;
+        }
+        moved = true;
       }
       if (!moved) break;
     }
@@ -1111,6 +1129,7 @@ class EventSimulation final : public TableSimulation {
   std::vector<char> in_pair_;        // per slot: in a pair resolved (an impulse or a push)
   std::vector<Eigen::Vector2d> pos_, vel_;  // every ball's position and velocity at t_
   std::vector<char> changed_, changed_now_;  // per slot: velocity changed in a sweep
+  std::vector<std::pair<size_t, size_t>> links_;  // slot pairs near contact (HandleSustained)
   std::vector<std::vector<int>> near_;  // per slot: balls near contact (HandleSustained's free)
   std::vector<double> near_made_;       // per slot: the shifts summed when near_ was made
   double last_sustained_t_ = -kNever;  // the last sustained contact's time and pair
