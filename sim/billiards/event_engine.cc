@@ -825,27 +825,9 @@ class EventSimulation final : public TableSimulation {
       changed_.swap(changed_now_);
     }
     // A ball the group leaves creeping slower than RestingStopSpeed stops (its roll would end
-    // within 1.4 ms, after 0.1 um), unless a ball of the group would then close on it again:
-    // a ball still driven (a ball rolling on, wedged between two that it pushes apart) keeps
-    // its creep; stopped, it would be hit again at once, thousands of times.
-    const auto pressed = [&](size_t k) {
-      const Ball& bk = cluster_balls_[k];
-      for (size_t q = 0; q < cluster_.size(); ++q) {
-        if (q == k) continue;
-        const Ball& bq = cluster_balls_[q];
-        const Eigen::Vector2d dp = (bk.r - bq.r).head<2>();
-        if (!linked(dp)) continue;
-        const double dist = dp.norm();
-        if (dist > 0.0 && bq.v.head<2>().dot(dp / dist) > kSweepApproach) return true;
-      }
-      return false;
-    };
+    // within 1.4 ms, after 0.1 um).
     for (size_t k = 0; k < cluster_.size(); ++k) {
-      if (!in_pair_[k]) continue;
-      Ball stopped = cluster_balls_[k];
-      StopCreep(model_, o_.effects, &stopped);
-      if (stopped.state != cluster_balls_[k].state && pressed(k)) continue;
-      cluster_balls_[k] = stopped;
+      if (in_pair_[k]) StopCreep(model_, o_.effects, &cluster_balls_[k]);
     }
     for (size_t k = 0; k < cluster_.size(); ++k) {
       counts_.state_changes += cluster_balls_[k].state != cluster_from_[k];
@@ -865,10 +847,13 @@ class EventSimulation final : public TableSimulation {
     }
     // Resting gaps between the group's balls (each at least the gap that the pair's closing
     // acceleration allows, as after a plastic contact), in a few Gauss-Seidel passes. Moving
-    // balls move; balls at rest too when the same pair comes back at the same instant (a
-    // sliding ball wedged between two at rest: the gaps cannot open otherwise).
-    const bool jammed = t_ == last_sustained_t_ && ia == last_sustained_a_ &&
-                        ib == last_sustained_b_;
+    // balls move; balls at rest too when the pair is jammed: it comes back at the same instant,
+    // or within its train after its gap could not open (a ball wedged between two at rest,
+    // which stop after each contact: the gaps cannot open otherwise, and the pair would be hit
+    // again within microseconds, thousands of times).
+    const bool jammed =
+        (t_ == last_sustained_t_ && ia == last_sustained_a_ && ib == last_sustained_b_) ||
+        (ia == jam_a_ && ib == jam_b_ && t_ - jam_t_ <= kRestingTrain);
     last_sustained_t_ = t_;
     last_sustained_a_ = ia;
     last_sustained_b_ = ib;
@@ -992,6 +977,19 @@ class EventSimulation final : public TableSimulation {
           if (cluster_[k] == ia && ma) shift(k, -step);
           if (cluster_[k] == ib && mb) shift(k, step);
         }
+      }
+    }
+    // Whether the pair's gap stayed short of its size (by more than the passes leave).
+    {
+      const Eigen::Vector2d dp = pos_[ib] - pos_[ia];
+      const double dist = dp.norm();
+      const Eigen::Vector2d n = dist > 0.0 ? Eigen::Vector2d(dp / dist) : Eigen::Vector2d::Zero();
+      const double size =
+          RestingGap(-(traj_[ib].a - traj_[ia].a).dot(n), gap_, PlasticBelow(ia, ib));
+      if (dist - d_ < (1.0 - kGapShortfall) * size) {
+        jam_a_ = ia;
+        jam_b_ = ib;
+        jam_t_ = t_;
       }
     }
     const size_t g = cluster_.size();
@@ -1137,6 +1135,8 @@ class EventSimulation final : public TableSimulation {
   std::vector<double> near_made_;       // per slot: the shifts summed when near_ was made
   double last_sustained_t_ = -kNever;  // the last sustained contact's time and pair
   int last_sustained_a_ = -1, last_sustained_b_ = -1;
+  double jam_t_ = -kNever;  // the last pair whose resting gap could not open, and when
+  int jam_a_ = -1, jam_b_ = -1;
   const double gap_;  // the largest resting gap (m)
   const double d_;   // contact distance of two balls (m)
   const double dc_;  // contact distance from a cushion nose line (m)
