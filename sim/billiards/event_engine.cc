@@ -171,6 +171,7 @@ class EventSimulation final : public TableSimulation {
               0.5 * model.spec().width_m + model.radius()) {
     resting_.resize(state_.balls.size());
     memo_.resize(state_.balls.size() * state_.balls.size());
+    last_plastic_.assign(memo_.size(), -kNever);
     slot_of_.assign(state_.balls.size(), -1);
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
     for (int i = 0; i < n_; ++i) Predict(i);
@@ -681,22 +682,14 @@ class EventSimulation final : public TableSimulation {
     return true;
   }
 
-  // Whether balls i and j are in a train of plastic contacts (the last within kRestingTrain,
-  // and no collision of either ball since): their next contact continues a sustained one.
-  bool InTrain(int i, int j) const {
-    for (const Resting& r : resting_[i]) {
-      if (r.partner == j) return t_ - r.t <= kRestingTrain;
-    }
-    return false;
-  }
-
-  // The approach speed (m/s) below which a contact of balls i and j is plastic: inside a train
-  // of a sustained contact the closing that re-forms it comes from the cloth alone (no
-  // impulse reached either ball since), so it is the same contact (the TC model's rule).
+  // The approach speed (m/s) below which a contact of balls i and j is plastic: within
+  // kRestingTrain of the pair's last plastic contact it continues that sustained contact (the
+  // TC model's rule: a contact that follows another within the contact time is not a new
+  // collision), re-forming because the resting gap it opened closed.
   double PlasticBelow(int i, int j) const {
-    return o_.resting_contacts == RestingContacts::kSustained && InTrain(i, j) && InTrain(j, i)
-               ? kTrainContactSpeed
-               : kRestingContactSpeed;
+    if (o_.resting_contacts != RestingContacts::kSustained) return kRestingContactSpeed;
+    const double last = last_plastic_[static_cast<size_t>(std::min(i, j)) * n_ + std::max(i, j)];
+    return t_ - last <= kRestingTrain ? kTrainContactSpeed : kRestingContactSpeed;
   }
 
   // Opens a resting gap between balls ia and ib (new trajectories set) after a plastic contact
@@ -781,6 +774,7 @@ class EventSimulation final : public TableSimulation {
         ++counts_.ball_ball_push;
       }
       in_pair_[si] = in_pair_[sj] = 1;
+      last_plastic_[static_cast<size_t>(std::min(i, j)) * n_ + std::max(i, j)] = t_;
     };
     resolve(ia, ib);
     // The group: every ball linked to the pair by gaps below the resting gap.
@@ -1107,6 +1101,7 @@ class EventSimulation final : public TableSimulation {
     uint32_t va = 0, vb = 0;  // versions start at 1: an unused memo matches nothing
   };
   std::vector<PairMemo> memo_;
+  std::vector<double> last_plastic_;  // per pair (a * n + b, a < b): its last plastic contact
   std::vector<Pending> heap_;
   double t_;
   bool dirty_ = true;

@@ -65,14 +65,17 @@ inline constexpr double kMinRestingGap = 1e-9;
 /// is. A contact at or above kRestingContactSpeed ends every train of its balls.
 inline constexpr double kRestingTrain = 0.01;
 
-/// Inside a train (RestingContacts::kSustained: the pair's last plastic contact within
-/// kRestingTrain, and no collision of either ball since) a contact re-forms only because the
-/// cloth closed the resting gap, so it continues the sustained contact: it is plastic below this
-/// approach speed (m/s), not only below kRestingContactSpeed, and its resting gap is sized for
-/// it (up to kSustainedRestingGap: a push the cloth closes at 2-4 m/s^2, a sliding ball driving
-/// a group, re-forms 2-3 times less often than with gaps sized for kRestingContactSpeed). The
-/// approach of such a re-formation is sqrt(2 a gap) <= 2.8 mm/s for two sliding balls at
-/// mu_s = 0.2 (a = 2 mu_s g) and the largest gap.
+/// Within kRestingTrain of a pair's last plastic contact (RestingContacts::kSustained) the pair
+/// is in a train: a contact re-forms because the cloth closed the resting gap that the last one
+/// opened, so it continues the sustained contact (the TC model's rule: a contact that follows
+/// another within the contact time is not a new collision). It is plastic below this approach
+/// speed (m/s), not only below kRestingContactSpeed, and its resting gap is sized for it (up to
+/// kSustainedRestingGap): a push the cloth closes at 2-4 m/s^2, a sliding ball driving a group,
+/// re-forms several times less often than with gaps sized for kRestingContactSpeed. The
+/// approach of such a re-formation is sqrt(2 a gap), at most 0.9 of this speed by the gap's
+/// size, if nothing else changed the balls' motion; a collision with a third ball in between
+/// may bring it anywhere below this speed, where a plastic answer instead of a bounce changes
+/// where a ball rolls to by v^2 / (2 mu_r g) = 0.13 mm at most.
 inline constexpr double kTrainContactSpeed = 5e-3;
 
 /// Predictions look at most this far ahead (s); a ball with nothing predicted within it is
