@@ -173,6 +173,7 @@ class EventSimulation final : public TableSimulation {
     memo_.resize(state_.balls.size() * state_.balls.size());
     last_plastic_.assign(memo_.size(), -kNever);
     slot_of_.assign(state_.balls.size(), -1);
+    if (model.spec().bounded) clear_ = ClearOfTheRails();
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
     for (int i = 0; i < n_; ++i) Predict(i);
   }
@@ -538,6 +539,33 @@ class EventSimulation final : public TableSimulation {
     return p;
   }
 
+  // A rectangle about the table's centre that no cushion, pocket or edge is near: every cull of
+  // PredictCushion, PredictPocket and PredictLeave fails for a path box inside it (empty when
+  // the layout leaves none).
+  Box ClearOfTheRails() const {
+    const TableSpec& spec = model_.spec();
+    Eigen::Vector2d half(0.5 * spec.length_m - dc_, 0.5 * spec.width_m - dc_);
+    const auto clear = [&](const Box& r) {
+      for (const CushionSegment& seg : spec.cushions) {
+        if (Near(r, seg.a.cwiseMin(seg.b), seg.a.cwiseMax(seg.b), dc_)) return false;
+        for (const Eigen::Vector2d& q : {seg.a, seg.b}) {
+          if (Near(r, q, q, dc_)) return false;
+        }
+      }
+      for (const Pocket& pk : spec.pockets) {
+        if (Near(r, pk.centre, pk.centre, pk.radius_m)) return false;
+      }
+      return r.lo.x() > -half_.x() && r.hi.x() < half_.x() && r.lo.y() > -half_.y() &&
+             r.hi.y() < half_.y();
+    };
+    for (int k = 0; k < 64 && half.minCoeff() > 0.0; ++k) {
+      const Box r{-half, half};
+      if (clear(r)) return r;
+      half *= 0.95;
+    }
+    return Box{Eigen::Vector2d::Constant(kNever), Eigen::Vector2d::Constant(-kNever)};
+  }
+
   // Ball i's earliest event from now, pushed on the heap.
   void Predict(int i) {
     ++counts_.predictions;
@@ -562,7 +590,9 @@ class EventSimulation final : public TableSimulation {
     const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
     // Where i goes from now to the end of its window.
     const Box box = IsTranslating(tr.state) ? PathBox(P, V, tr.a, Window(i) - t_) : Box{P, P};
-    if (IsTranslating(tr.state) && model_.spec().bounded) {
+    const bool in_clear = box.lo.x() >= clear_.lo.x() && box.hi.x() <= clear_.hi.x() &&
+                          box.lo.y() >= clear_.lo.y() && box.hi.y() <= clear_.hi.y();
+    if (IsTranslating(tr.state) && model_.spec().bounded && !in_clear) {
       const double S = Window(i) - t_;
       const Eigen::Vector2d& A = tr.a;
       if (cushions_) {
@@ -1136,6 +1166,8 @@ class EventSimulation final : public TableSimulation {
   const double d_;   // contact distance of two balls (m)
   const double dc_;  // contact distance from a cushion nose line (m)
   const bool cushions_, pockets_, orientation_;
+  // No cushion, pocket or edge is near a path inside this box (ClearOfTheRails).
+  Box clear_{Eigen::Vector2d::Constant(kNever), Eigen::Vector2d::Constant(-kNever)};
   const Eigen::Vector2d half_;  // |x|, |y| beyond which a ball has left a bounded table
 };
 
