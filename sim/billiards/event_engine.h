@@ -28,6 +28,11 @@
 //   group (balls linked by gaps below kSustainedRestingGap) by sweeps of plastic contact
 //   impulses (projected Gauss-Seidel, the simultaneous treatment of a resting contact group in
 //   rigid-body simulation), which moves a group pushed slowly as one body.
+// - Within kRestingTrain of a pair's last plastic contact, a contact of the pair continues it
+//   (TC's rule, per pair): plastic below kTrainContactSpeed, with the resting gap sized for
+//   that (kSustainedRestingGap at most), so a push re-forms its contact a few times less often.
+//   A pair whose gap cannot open (a ball wedged between two at rest) is jammed for its train:
+//   the balls at rest move too.
 // The previous treatment, free-ball plastic hops each followed by micro-slides, stays
 // reachable as RestingContacts::kHops.
 #ifndef SPORTSIM_SIM_BILLIARDS_EVENT_ENGINE_H_
