@@ -29,7 +29,8 @@ constexpr int kSustainedSweeps = 32;
 // after them (1 nm to 3 um) then takes 1 ms to 3 s to close at that speed, and the queue
 // handles it if it does. (10 um/s, before the jam rule, let a wedged snooker ball of the
 // 10,000-shot test run to 18,890 events; with it, 10 um/s would save 6 % of the storm batch's
-// work, but a slow push into a frozen line would end 1 % off its closed form, v / 5 each.)
+// work, but a slow push into a frozen line would end more than 1 % off its closed form,
+// v / 5 each: its test fails.)
 constexpr double kSweepApproach = 1e-6;
 // Gauss-Seidel passes that open the resting gaps inside a group.
 constexpr int kGapPasses = 8;
