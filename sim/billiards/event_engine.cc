@@ -27,7 +27,7 @@ constexpr double kTouchGap = 0.5 * kMinRestingGap;
 constexpr int kSustainedSweeps = 32;
 // The sweeps stop resolving a pair approaching slower than this (m/s): the resting gap opened
 // after them (1 nm to 3 um) then takes 1 ms to 3 s to close at that speed, and the queue
-// handles it if it does. (10 um/s, before the jam rule, let a wedged snooker ball of the
+// handles it if it does. (10 um/s, before the jam rule, let a snooker shot of the
 // 10,000-shot test run to 18,890 events; with it, 10 um/s would save 6 % of the storm batch's
 // work, but a slow push into a frozen line would end more than 1 % off its closed form,
 // v / 5 each: its test fails.)
