@@ -759,6 +759,13 @@ class EventSimulation final : public TableSimulation {
     Eval(i, t_, &cluster_balls_.back());
     cluster_from_.push_back(cluster_balls_.back().state);
     in_pair_.push_back(0);
+    active_.push_back(0);
+    expanded_.push_back(0);
+    changed_.push_back(0);
+    changed_now_.push_back(0);
+    cluster_moved_.push_back(0);
+    near_made_.push_back(-1.0);
+    if (near_.size() < cluster_.size()) near_.resize(cluster_.size());
     return static_cast<int>(cluster_.size()) - 1;
   }
 
@@ -777,6 +784,13 @@ class EventSimulation final : public TableSimulation {
     cluster_balls_.clear();
     cluster_from_.clear();
     in_pair_.clear();
+    active_.clear();
+    expanded_.clear();
+    changed_.clear();
+    changed_now_.clear();
+    cluster_moved_.clear();
+    near_made_.clear();
+    links_.clear();
     // Every ball's position and velocity now (the group's are updated below).
     pos_.resize(n_);
     vel_.resize(n_);
@@ -808,31 +822,37 @@ class EventSimulation final : public TableSimulation {
       in_pair_[si] = in_pair_[sj] = 1;
       last_plastic_[static_cast<size_t>(std::min(i, j)) * n_ + std::max(i, j)] = t_;
     };
-    resolve(ia, ib);
-    // The group: every ball linked to the pair by gaps below the resting gap.
-    for (size_t k = 0; k < cluster_.size(); ++k) {
-      const Eigen::Vector2d ri = cluster_balls_[k].r.head<2>();
+    // The group grows from the pair: a ball joins when it is linked to one whose velocity
+    // changed (only such a pair can start to approach), with its links to the group's balls.
+    // The rest of a cluster (a frozen rack the pair belongs to) is not looked at.
+    const auto expand = [&](size_t k) {
+      if (expanded_[k]) return;
+      expanded_[k] = 1;
+      const Eigen::Vector2d rk = pos_[cluster_[k]];
       for (int j = 0; j < n_; ++j) {
         if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
-        if (linked(pos_[j] - ri)) Slot(j);
+        if (!linked(pos_[j] - rk)) continue;
+        const size_t s = static_cast<size_t>(Slot(j));
+        for (size_t q = 0; q < s; ++q) {
+          if (linked(pos_[j] - pos_[cluster_[q]])) links_.push_back({q, s});
+        }
       }
-    }
+    };
+    resolve(ia, ib);
+    if (linked(pos_[ib] - pos_[ia])) links_.push_back({0, 1});
+    expand(0);
+    expand(1);
     // Sweeps over the group's touching pairs: each approaching one is resolved. Only pairs
-    // with a ball whose velocity changed since the last sweep need a look.
-    // The group's linked pairs (slots k < q, in order); the sweeps change velocities only.
-    links_.clear();
-    for (size_t k = 0; k < cluster_.size(); ++k) {
-      for (size_t q = k + 1; q < cluster_.size(); ++q) {
-        if (linked((cluster_balls_[q].r - cluster_balls_[k].r).head<2>())) links_.push_back({k, q});
-      }
-    }
-    changed_.assign(cluster_.size(), 0);
+    // with a ball whose velocity changed since the last sweep need a look; the sweeps change
+    // velocities only.
     changed_[0] = changed_[1] = 1;
     for (int sweep = 0; sweep < kSustainedSweeps; ++sweep) {
       ++counts_.sustained_sweeps;
       bool any = false;
-      changed_now_.assign(cluster_.size(), 0);
-      for (const auto& [k, q] : links_) {
+      std::fill(changed_now_.begin(), changed_now_.end(), 0);
+      const size_t nl = links_.size();
+      for (size_t l = 0; l < nl; ++l) {
+        const auto [k, q] = links_[l];
         if (!changed_[k] && !changed_[q] && !changed_now_[k] && !changed_now_[q]) continue;
         const Ball& bk = cluster_balls_[k];
         const Ball& bq = cluster_balls_[q];
@@ -849,6 +869,9 @@ class EventSimulation final : public TableSimulation {
       }
       if (!any) break;
       changed_.swap(changed_now_);
+      for (size_t k = 0; k < cluster_.size(); ++k) {
+        if (changed_[k]) expand(k);
+      }
     }
     // A ball the group leaves creeping slower than RestingStopSpeed stops (its roll would end
     // within 1.4 ms, after 0.1 um).
@@ -861,7 +884,6 @@ class EventSimulation final : public TableSimulation {
     }
     // New trajectories for the balls an impulse changed; the others keep theirs unless the
     // resting gaps below move them.
-    cluster_moved_.assign(cluster_.size(), 0);
     const auto restart = [&](size_t k) {
       if (!cluster_moved_[k]) {
         SetOrigin(cluster_[k], cluster_balls_[k], t_);
@@ -897,8 +919,6 @@ class EventSimulation final : public TableSimulation {
     // than `partner` to which it is not already closer. Only the balls that were within
     // kNearSlack of contact when its list was made can be (the list holds while the shifts
     // made since, all balls together, and this move add up to less than kNearSlack).
-    if (near_.size() < cluster_.size()) near_.resize(cluster_.size());
-    near_made_.assign(cluster_.size(), -1.0);
     double shifted = 0.0;  // the length of every shift so far, summed
     const auto free = [&](size_t k, int partner, const Eigen::Vector2d& p) {
       const int i = cluster_[k];
@@ -926,37 +946,25 @@ class EventSimulation final : public TableSimulation {
       MoveOrigin(i, by);
       pos_[i] += by;
       shifted += by.norm();
+      active_[k] = 1;
     };
-    size_t grown = 0;  // group members [0, grown) have been scanned for new neighbours
-    // The pairs the passes look at: within kNearSlack of linked when listed (slots k < q, in
-    // order), which holds every linked pair while the shifts since add up to less.
-    double links_made = -kNever;
+    // The gaps to open are those of the balls an impulse or a gap moved ("active"): the
+    // passes look at the pairs with an active ball, and a ball that a gap moves brings its
+    // neighbours in for the next pass.
+    for (size_t k = 0; k < cluster_.size(); ++k) active_[k] = in_pair_[k];
     const double reach = (link + kNearSlack) * (link + kNearSlack);
     for (int pass = 0; pass < kGapPasses; ++pass) {
       bool moved = false;
-      const size_t before = cluster_.size();
-      // A ball within the resting gap of the group joins it.
-      for (size_t k = pass == 0 ? 0 : grown; k < cluster_.size(); ++k) {
-        for (int j = 0; j < n_; ++j) {
-          if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
-          if (linked(pos_[j] - pos_[cluster_[k]])) {
-            Slot(j);
-            cluster_moved_.push_back(0);
-            near_made_.push_back(-1.0);
-            if (near_.size() < cluster_.size()) near_.resize(cluster_.size());
-          }
-        }
+      for (size_t k = 0; k < cluster_.size(); ++k) {
+        if (active_[k]) expand(k);
       }
-      grown = cluster_.size();
       const size_t g = cluster_.size();
-      if (pass == 0 || g != before || shifted - links_made >= kNearSlack) {
-        links_made = shifted;
-        links_.clear();
-        for (size_t k = 0; k < g; ++k) {
-          for (size_t q = k + 1; q < g; ++q) {
-            if ((pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach) {
-              links_.push_back({k, q});
-            }
+      links_.clear();
+      for (size_t k = 0; k < g; ++k) {
+        for (size_t q = k + 1; q < g; ++q) {
+          if ((active_[k] || active_[q]) &&
+              (pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach) {
+            links_.push_back({k, q});
           }
         }
       }
@@ -1155,6 +1163,8 @@ class EventSimulation final : public TableSimulation {
   std::vector<MotionState> cluster_from_;
   std::vector<char> cluster_moved_;  // per slot: new trajectory set
   std::vector<char> in_pair_;        // per slot: in a pair resolved (an impulse or a push)
+  std::vector<char> active_;         // per slot: in a pair resolved, or moved by a gap
+  std::vector<char> expanded_;       // per slot: its linked balls have joined the group
   std::vector<Eigen::Vector2d> pos_, vel_;  // every ball's position and velocity at t_
   std::vector<char> changed_, changed_now_;  // per slot: velocity changed in a sweep
   std::vector<std::pair<size_t, size_t>> links_;  // slot pairs near contact (HandleSustained)
