@@ -32,6 +32,10 @@ constexpr int kSustainedSweeps = 32;
 // work, but a slow push into a frozen line would end more than 1 % off its closed form,
 // v / 5 each: its test fails.)
 constexpr double kSweepApproach = 1e-6;
+// Nor one approaching slower than this fraction of the approach of the pair that started the
+// group (the velocities settle to 0.1 % of it; 1 % leaves a slow push into a frozen line more
+// than 1 % off v / 5 each).
+constexpr double kSweepSettle = 1e-3;
 // Gauss-Seidel passes that open the resting gaps inside a group.
 constexpr int kGapPasses = 8;
 // A resting gap short of its size by less than a quarter of it, or by less than kGapSlack (m),
@@ -838,6 +842,12 @@ class EventSimulation final : public TableSimulation {
         }
       }
     };
+    double settle = kSweepApproach;  // the sweeps resolve pairs approaching faster than this
+    {
+      const Eigen::Vector2d dp = pos_[ib] - pos_[ia];
+      const double dist = dp.norm();
+      if (dist > 0.0) settle = std::max(settle, kSweepSettle * (vel_[ia] - vel_[ib]).dot(dp / dist));
+    }
     resolve(ia, ib);
     if (linked(pos_[ib] - pos_[ia])) links_.push_back({0, 1});
     expand(0);
@@ -860,7 +870,7 @@ class EventSimulation final : public TableSimulation {
         const double dist = dp.norm();
         if (!(dist > 0.0)) continue;
         const double approach = (bk.v - bq.v).head<2>().dot(dp / dist);
-        if (approach <= kSweepApproach) continue;
+        if (approach <= settle) continue;
         const int i = cluster_[k], j = cluster_[q];
         if (approach >= PlasticBelow(i, j)) continue;
         resolve(std::min(i, j), std::max(i, j));
