@@ -773,15 +773,16 @@ class EventSimulation final : public TableSimulation {
     return static_cast<int>(cluster_.size()) - 1;
   }
 
-  // Resolves a resting ball-ball contact (approach below kRestingContactSpeed, or a push with
-  // none) as a sustained contact of its group (RestingContacts::kSustained; docs/billiards.md,
-  // "Resting contacts"): the group is every ball linked to the pair by gaps below the
-  // sustained resting gap; the pair and then every pair of the group that approaches (slower
-  // than kRestingContactSpeed, faster than kSweepApproach) are resolved by CollideBallsResting
-  // in sweeps (projected Gauss-Seidel on the plastic contacts) until none does, all at this
-  // instant and as one event; creeping balls stop (StopCreep); then resting gaps open inside
-  // the group, and only the balls that changed are predicted again. A pair of the group found
-  // approaching faster is a real collision: left to the queue, which has it at once.
+  // Resolves a resting ball-ball contact (approach below PlasticBelow, or a push with none) as
+  // a sustained contact of its group (RestingContacts::kSustained; docs/billiards.md, "Resting
+  // contacts"): the group grows from the pair through the balls linked (gaps below the
+  // sustained resting gap) to a ball whose velocity changed; the pair and then every pair of
+  // the group that approaches (slower than PlasticBelow, faster than the sweeps' settling
+  // speed) are resolved by CollideBallsResting in sweeps (projected Gauss-Seidel on the
+  // plastic contacts) until none does, all at this instant and as one event; creeping balls
+  // stop (StopCreep); then the resting gaps of the balls moved open, and only the balls that
+  // changed are predicted again. A pair of the group found approaching faster is a real
+  // collision: left to the queue, which has it at once.
   void HandleSustained(int ia, int ib, std::vector<Event>* events) {
     for (const int i : cluster_) slot_of_[i] = -1;
     cluster_.clear();
