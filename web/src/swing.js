@@ -4,7 +4,7 @@
 // side, y up. Beside it the clubhead speed over the swing's time with the impact marked, and the
 // ball's flight from the IMPACT event's launch (x downrange, z up) as a side view.
 import { SwingEventKind, SwingPhase } from "../gen/sportsim/v1/swing_pb.js";
-import { setConnection } from "./conn.js";
+import { follow, setConnection } from "./conn.js";
 import { viewer, resetViewer } from "./state.js";
 
 const WATCH_RATE_HZ = 120;
@@ -237,25 +237,17 @@ export function showSwing(app, clients, sessionId) {
     viewer.ready = true;
   }
 
-  async function watch() {
-    let delayMs = 500;
-    while (!stopped) {
-      try {
+  function watch() {
+    return follow({
+      open: () => {
         const req = { sessionId, rateHz: WATCH_RATE_HZ };
         if (lastSeq > 0n) req.fromSequence = lastSeq;
-        for await (const snap of clients.swing.watchSwing(req, { signal: ac.signal })) {
-          setConnection("live", false);
-          delayMs = 500;
-          onSnapshot(snap);
-        }
-      } catch (e) {
-        if (stopped) return;
-        setConnection("watch: " + e.message, true);
-        viewer.error = e.message;
-      }
-      await new Promise((r) => setTimeout(r, delayMs));
-      delayMs = Math.min(delayMs * 2, 5000);
-    }
+        return clients.swing.watchSwing(req, { signal: ac.signal });
+      },
+      onItem: onSnapshot,
+      stopped: () => stopped,
+      onError: (e) => { viewer.error = e.message; },
+    });
   }
 
   (async () => {

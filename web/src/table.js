@@ -4,7 +4,7 @@
 // token (#token=...) the page plays: aim with the mouse (PreviewShot's aim line), speed and spin
 // sliders, Shoot, and PlaceBall on a click while the cue ball is in hand.
 import { EventKind, MotionState } from "../gen/sportsim/v1/billiards_pb.js";
-import { setConnection } from "./conn.js";
+import { follow, setConnection } from "./conn.js";
 import { viewer, resetViewer } from "./state.js";
 
 const WATCH_RATE_HZ = 60;                    // snapshots asked for while balls move
@@ -344,25 +344,17 @@ export function showTable(app, clients, tableId, token) {
     renderState();
   }
 
-  async function watch() {
-    let delayMs = 500;
-    while (!stopped) {
-      try {
+  function watch() {
+    return follow({
+      open: () => {
         const req = { tableId, rateHz: WATCH_RATE_HZ };
         if (lastSeq > 0n) req.fromSequence = lastSeq;
-        for await (const s of clients.billiards.watchTable(req, { signal: ac.signal })) {
-          setConnection("live", false);
-          delayMs = 500;
-          onSnapshot(s);
-        }
-      } catch (e) {
-        if (stopped) return;
-        setConnection("watch: " + e.message, true);
-        viewer.error = e.message;
-      }
-      await new Promise((r) => setTimeout(r, delayMs));
-      delayMs = Math.min(delayMs * 2, 5000);
-    }
+        return clients.billiards.watchTable(req, { signal: ac.signal });
+      },
+      onItem: onSnapshot,
+      stopped: () => stopped,
+      onError: (e) => { viewer.error = e.message; },
+    });
   }
 
   // ---- playing ----
