@@ -40,7 +40,8 @@ inline constexpr double kRestingContactSpeed = 1e-3;
 /// approaching along the line of centres faster than kMinApproachSpeed.
 bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 
-/// Resolves a resting ball-ball contact (approach below kRestingContactSpeed) as a sustained
+/// Resolves a resting ball-ball contact (approach below kRestingContactSpeed, or below the
+/// event engine's kTrainContactSpeed when it continues a sustained contact) as a sustained
 /// contact: a finite force, small against the cloth's friction, so a ball that is rolling,
 /// spinning or at rest stays on the rolling manifold (w_xy = z^ x v / R) and answers an impulse
 /// P at its contact point r_c with dv = 5/(7m) (P_h - z^ x (r_c x P) / R), dw_z = (r_c x P)_z / I:

@@ -44,8 +44,9 @@ constexpr int kGapPasses = 8;
 // pass), so chasing the rest ran most groups to the pass limit.
 constexpr double kGapSlack = 1e-12;
 constexpr double kGapShortfall = 0.25;
-// The gap passes check a move against the balls within this (m) of contact: moves are resting
-// gaps (at most kSustainedRestingGap each), so a list stays good for several.
+// The gap passes check a move against the balls within this (m) of contact: moves are mostly
+// resting gaps (at most kSustainedRestingGap each), so a list stays good for several (its
+// validity is judged by the lengths of the moves made, whatever they are).
 constexpr double kNearSlack = 4 * kSustainedRestingGap;
 
 // The resting gap for a contact the cloth closes at `closing` m/s^2: re-forming from it, the
@@ -178,6 +179,7 @@ class EventSimulation final : public TableSimulation {
     resting_.resize(state_.balls.size());
     memo_.resize(state_.balls.size() * state_.balls.size());
     last_plastic_.assign(memo_.size(), -kNever);
+    jammed_at_.assign(memo_.size(), -kNever);
     slot_of_.assign(state_.balls.size(), -1);
     if (model.spec().bounded) clear_ = ClearOfTheRails();
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
@@ -782,7 +784,7 @@ class EventSimulation final : public TableSimulation {
   // plastic contacts) until none does, all at this instant and as one event; creeping balls
   // stop (StopCreep); then the resting gaps of the balls moved open, and only the balls that
   // changed are predicted again. A pair of the group found approaching faster is a real
-  // collision: left to the queue, which has it at once.
+  // collision: left to the queue, which has it when the pair touches.
   void HandleSustained(int ia, int ib, std::vector<Event>* events) {
     for (const int i : cluster_) slot_of_[i] = -1;
     cluster_.clear();
@@ -912,7 +914,7 @@ class EventSimulation final : public TableSimulation {
     // again within microseconds, thousands of times).
     const bool jammed =
         (t_ == last_sustained_t_ && ia == last_sustained_a_ && ib == last_sustained_b_) ||
-        (ia == jam_a_ && ib == jam_b_ && t_ - jam_t_ <= kRestingTrain);
+        t_ - jammed_at_[static_cast<size_t>(ia) * n_ + ib] <= kRestingTrain;
     last_sustained_t_ = t_;
     last_sustained_a_ = ia;
     last_sustained_b_ = ib;
@@ -948,6 +950,27 @@ class EventSimulation final : public TableSimulation {
         if (j == partner) continue;
         const double after = (pos_[j] - p).squaredNorm();
         if (after < d_ * d_ && after < (pos_[j] - pos_[i]).squaredNorm()) return false;
+      }
+      // Nor deeper into a cushion or a pocket's capture circle than it is (a ball at rest
+      // against a rail may be moved by a jammed pair: it would stay inside, never predicted).
+      const bool clear = p.x() >= clear_.lo.x() && p.x() <= clear_.hi.x() &&
+                         p.y() >= clear_.lo.y() && p.y() <= clear_.hi.y();
+      if (!clear && cushions_) {
+        for (const CushionSegment& seg : model_.spec().cushions) {
+          const double after = (p - ClosestOnSegment(seg.a, seg.b, p)).squaredNorm();
+          if (after < dc_ * dc_ &&
+              after < (pos_[i] - ClosestOnSegment(seg.a, seg.b, pos_[i])).squaredNorm()) {
+            return false;
+          }
+        }
+      }
+      if (!clear && pockets_) {
+        for (const Pocket& pk : model_.spec().pockets) {
+          const double after = (p - pk.centre).squaredNorm();
+          if (after < pk.radius_m * pk.radius_m && after < (pos_[i] - pk.centre).squaredNorm()) {
+            return false;
+          }
+        }
       }
       return true;
     };
@@ -1032,9 +1055,7 @@ class EventSimulation final : public TableSimulation {
       const double size =
           RestingGap(-(traj_[ib].a - traj_[ia].a).dot(n), gap_, PlasticBelow(ia, ib));
       if (dist - d_ < (1.0 - kGapShortfall) * size) {
-        jam_a_ = ia;
-        jam_b_ = ib;
-        jam_t_ = t_;
+        jammed_at_[static_cast<size_t>(ia) * n_ + ib] = t_;
       }
     }
     const size_t g = cluster_.size();
@@ -1167,7 +1188,7 @@ class EventSimulation final : public TableSimulation {
   };
   std::vector<std::array<Resting, 4>> resting_;
   // The group a sustained contact reaches (HandleSustained): ball indices, their states at t_
-  // and motion states before, and the pairs resolved, in order.
+  // and motion states before, and per-slot flags.
   std::vector<int> cluster_;
   std::vector<int> slot_of_;  // per ball: its slot in cluster_, or -1
   std::vector<Ball> cluster_balls_;
@@ -1183,8 +1204,7 @@ class EventSimulation final : public TableSimulation {
   std::vector<double> near_made_;       // per slot: the shifts summed when near_ was made
   double last_sustained_t_ = -kNever;  // the last sustained contact's time and pair
   int last_sustained_a_ = -1, last_sustained_b_ = -1;
-  double jam_t_ = -kNever;  // the last pair whose resting gap could not open, and when
-  int jam_a_ = -1, jam_b_ = -1;
+  std::vector<double> jammed_at_;  // per pair (a * n + b, a < b): when its gap last could not open
   const double gap_;  // the largest resting gap (m)
   const double d_;   // contact distance of two balls (m)
   const double dc_;  // contact distance from a cushion nose line (m)

@@ -67,7 +67,8 @@ inline constexpr double kMinRestingGap = 1e-9;
 
 /// A plastic (resting or sustained) contact between the same two bodies within this time (s) of
 /// the previous one continues a push (a train of hops) and is not reported again; the first one
-/// is. A contact at or above kRestingContactSpeed ends every train of its balls.
+/// is. A collision that is not plastic (at or above kRestingContactSpeed, and not a sustained
+/// contact's continuation below kTrainContactSpeed) ends every train of its balls.
 inline constexpr double kRestingTrain = 0.01;
 
 /// Within kRestingTrain of a pair's last plastic contact (RestingContacts::kSustained) the pair

@@ -77,12 +77,8 @@ double PolyEval(const double* c, int degree, double x) {
   return f;
 }
 
-// True when p > 0 everywhere on [0, hi], shown by its Bernstein coefficients there: p lies in
-// their convex hull (Farouki and Rajan, "On the numerical condition of polynomials in Bernstein
-// form", CAGD 4, 1987), so all of them positive proves it. Each must clear a margin far above
-// the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
-// call passes has no sign change the search below could have found either: it only saves the
-// search. Most predictions in a billiards shot are such pairs (near, but moving apart).
+namespace {
+
 // C(i, k) / C(n, k) for every degree n, i <= n and k <= i (each the quotient of two exact
 // integers, rounded once).
 struct BernsteinRatios {
@@ -103,6 +99,14 @@ struct BernsteinRatios {
 };
 constexpr BernsteinRatios kBernsteinRatios;
 
+}  // namespace
+
+// True when p > 0 everywhere on [0, hi], shown by its Bernstein coefficients there: p lies in
+// their convex hull (Farouki and Rajan, "On the numerical condition of polynomials in Bernstein
+// form", CAGD 4, 1987), so all of them positive proves it. Each must clear a margin far above
+// the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
+// call passes has no sign change the search below could have found either: it only saves the
+// search. Most predictions in a billiards shot are such pairs (near, but moving apart).
 bool ProvablyPositive(const double* c, int degree, double hi) {
   double a[kMaxPolyDegree + 1];  // p(hi t) = sum a_k t^k, t in [0, 1]
   double scale = 1.0, largest = 0.0;
