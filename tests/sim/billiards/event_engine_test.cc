@@ -490,6 +490,32 @@ TEST(EventEngineTest, BallWedgingTwoAtRestApartDoesNotStorm) {
   EXPECT_LE(sim->events_processed(), 100);
 }
 
+// The same wedge against the middle of a short rail: the ball it pushes towards the rail is
+// frozen to it. The gaps that open the jam move balls at rest, but never into the cushion (a
+// ball at rest inside it would stay there: nothing predicts a ball at rest against a rail).
+TEST(EventEngineTest, WedgeAgainstARailDoesNotPushABallIntoTheCushion) {
+  const TableModel m = Model("pool-9ft");
+  const double R = m.radius(), d = 2 * R, th = DegToRad(0.75), v = 0.014;
+  const double xr = 0.5 * m.spec().length_m - m.cushion_contact_distance();
+  TableState s{.balls = {BallAt("a", xr - 2 * d * std::cos(th), 0, m),
+                         BallAt("b", xr - d * std::cos(th), d * std::sin(th), m, {0, -v, 0},
+                                {v / R, 0, 0}),
+                         BallAt("c", xr, 0, m)}};
+  std::vector<Event> ev;
+  std::unique_ptr<TableSimulation> sim = Sim(m, kEvent, s, &ev);
+  double worst = -1.0;
+  for (int k = 1; k <= 200 && !sim->AtRest(); ++k) {
+    ASSERT_TRUE(sim->AdvanceTo(k * 0.01, &ev).ok());
+    worst = std::max(worst, LargestCushionPenetration(m, sim->state()));
+    ASSERT_LE(LargestOverlap(m, sim->state()), 1e-9);
+  }
+  std::printf("wedge at a rail: %lld events handled, deepest into a cushion %.3e m\n",
+              static_cast<long long>(sim->events_processed()), worst);
+  EXPECT_TRUE(sim->AtRest());
+  EXPECT_LE(worst, 1e-12);
+  EXPECT_LE(sim->events_processed(), 100);
+}
+
 // The storm batch (bench/billiards_storms.h): 1000 seeded random shots from the tight 8-ball
 // rack, FastFiz's distribution (heading uniform, cue speed 0.5-4.5 m/s, elevation 5-30 deg, tip
 // offsets within +-10 mm). With sustained contacts the events handled per shot stay short
