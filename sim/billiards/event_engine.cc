@@ -151,6 +151,11 @@ Box PathBox(const Eigen::Vector2d& p, const Eigen::Vector2d& v, const Eigen::Vec
   }
   return box;
 }
+// Is the box inside `region` (edges included)?
+bool Within(const Box& box, const Box& region) {
+  return box.lo.x() >= region.lo.x() && box.hi.x() <= region.hi.x() &&
+         box.lo.y() >= region.lo.y() && box.hi.y() <= region.hi.y();
+}
 // Does the box come within `reach` of the box [lo, hi]?
 bool Near(const Box& box, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, double reach) {
   return box.lo.x() <= hi.x() + reach && box.hi.x() >= lo.x() - reach &&
@@ -363,25 +368,36 @@ class EventSimulation final : public TableSimulation {
 
   // --- Prediction --------------------------------------------------------------------------
 
+  // The index of the pair of balls i and j (either order) in the n x n per-pair arrays.
+  size_t PairIndex(int i, int j) const {
+    return static_cast<size_t>(std::min(i, j)) * n_ + std::max(i, j);
+  }
+
   // The end of what can be predicted for ball i now.
   double Window(int i) const { return std::min(traj_[i].t_next, t_ + kPredictionHorizon); }
 
-  // Ball i (at P, V now, its path within `box` over its window) against ball j, looking at
-  // most `horizon` ahead. `now_only`, when given, is set when the answer holds only at this instant: the pair was
+  // Whether balls i (its path within `box` from now) and j can meet at all: one of them
+  // translates, and their path boxes come within contact (the margin covers touching pairs and
+  // the rounding of boxes made from different origins). Taken before the pair's memo: most
+  // balls rest most of the time, and most pairs are far apart.
+  bool MayMeet(bool i_translating, const Box& box, int j) const {
+    const Trajectory& tj = traj_[j];
+    if (!i_translating && !IsTranslating(tj.state)) return false;
+    return Near(box, tj.lo, tj.hi, d_ + kTouchGap + 1e-10);
+  }
+
+  // Ball i (at P, V now) against ball j, a pair that MayMeet, looking at most `horizon` ahead.
+  // `now_only`, when given, is set when the answer holds only at this instant: the pair was
   // touching, so what was found depends on how close it is now (the contact now, or a threshold
   // below 2R for a pair that overlaps by rounding).
-  Pending PredictPair(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, const Box& box,
-                      int j, double horizon, bool* now_only = nullptr) const {
+  Pending PredictPair(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
+                      double horizon, bool* now_only = nullptr) const {
     const Trajectory& ti = traj_[i];
     const Trajectory& tj = traj_[j];
     Pending p{.kind = Kind::kBall, .a = std::min(i, j), .b = std::max(i, j)};
     p.va = traj_[p.a].version;
     p.vb = traj_[p.b].version;
-    if (!IsTranslating(ti.state) && !IsTranslating(tj.state)) return p;
     if (ti.state == MotionState::kPocketed || tj.state == MotionState::kPocketed) return p;
-    // Broad phase: i's path box from now and j's whole path box (it covers j from now on). The
-    // margin covers touching pairs and the rounding of boxes made from different origins.
-    if (!Near(box, tj.lo, tj.hi, d_ + kTouchGap + 1e-10)) return p;
     const double S = std::min(horizon, Window(j) - t_);
     const Eigen::Vector2d dp = PosAt(j, t_) - P;
     const Eigen::Vector2d dv = VelAt(j, t_) - V;
@@ -431,17 +447,17 @@ class EventSimulation final : public TableSimulation {
   // answer depends on the instant it was made, so it is not kept. A ball predicted after
   // its partner (the two balls of a collision, a group after a sustained contact, a ball whose
   // earliest event went stale) then solves only the pairs that changed.
-  Pending PairEvent(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, const Box& box,
-                    int j, double horizon) {
+  Pending PairEvent(int i, const Eigen::Vector2d& P, const Eigen::Vector2d& V, int j,
+                    double horizon) {
     const int a = std::min(i, j), b = std::max(i, j);
-    PairMemo& m = memo_[static_cast<size_t>(a) * n_ + b];
+    PairMemo& m = memo_[PairIndex(a, b)];
     const uint32_t va = traj_[a].version, vb = traj_[b].version;
     const double end = t_ + std::min(horizon, Window(j) - t_);
     if (m.va == va && m.vb == vb && m.t >= t_ && (m.t < kNever || m.until >= end)) {
       return Pending{.t = m.t, .kind = Kind::kBall, .a = a, .b = b, .va = va, .vb = vb};
     }
     bool now_only = false;
-    const Pending p = PredictPair(i, P, V, box, j, horizon, &now_only);
+    const Pending p = PredictPair(i, P, V, j, horizon, &now_only);
     m = now_only ? PairMemo{} : PairMemo{.t = p.t, .until = end, .va = va, .vb = vb};
     return p;
   }
@@ -522,15 +538,18 @@ class EventSimulation final : public TableSimulation {
     return p;
   }
 
+  // Whether a path box stays strictly inside a bounded table's edges (half_).
+  bool OnTable(const Box& box) const {
+    return box.lo.x() > -half_.x() && box.hi.x() < half_.x() && box.lo.y() > -half_.y() &&
+           box.hi.y() < half_.y();
+  }
+
   // A bounded table's centre line plus a radius on each side: past it the ball has left the
   // table (cushions off, or pockets off and through a pocket mouth).
   Pending PredictLeave(int i, const Box& box, double S, const Eigen::Vector2d& P,
                        const Eigen::Vector2d& V, const Eigen::Vector2d& A) const {
     Pending p{.kind = Kind::kPocket, .a = i, .other = -1, .va = traj_[i].version};
-    if (box.lo.x() > -half_.x() && box.hi.x() < half_.x() && box.lo.y() > -half_.y() &&
-        box.hi.y() < half_.y()) {
-      return p;
-    }
+    if (OnTable(box)) return p;
     double best = kNever;
     for (int k = 0; k < 2; ++k) {
       for (const double side : {1.0, -1.0}) {
@@ -563,8 +582,7 @@ class EventSimulation final : public TableSimulation {
       for (const Pocket& pk : spec.pockets) {
         if (Near(r, pk.centre, pk.centre, pk.radius_m)) return false;
       }
-      return r.lo.x() > -half_.x() && r.hi.x() < half_.x() && r.lo.y() > -half_.y() &&
-             r.hi.y() < half_.y();
+      return OnTable(r);
     };
     for (int k = 0; k < 64 && half.minCoeff() > 0.0; ++k) {
       const Box r{-half, half};
@@ -598,9 +616,7 @@ class EventSimulation final : public TableSimulation {
     const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
     // Where i goes from now to the end of its window.
     const Box box = IsTranslating(tr.state) ? PathBox(P, V, tr.a, Window(i) - t_) : Box{P, P};
-    const bool in_clear = box.lo.x() >= clear_.lo.x() && box.hi.x() <= clear_.hi.x() &&
-                          box.lo.y() >= clear_.lo.y() && box.hi.y() <= clear_.hi.y();
-    if (IsTranslating(tr.state) && model_.spec().bounded && !in_clear) {
+    if (IsTranslating(tr.state) && model_.spec().bounded && !Within(box, clear_)) {
       const double S = Window(i) - t_;
       const Eigen::Vector2d& A = tr.a;
       if (cushions_) {
@@ -618,13 +634,9 @@ class EventSimulation final : public TableSimulation {
     // Predict(i) runs), so a later contact would be thrown away.
     const bool translating = IsTranslating(tr.state);
     for (int j = 0; j < n_; ++j) {
-      // Two balls that are not translating never meet (PredictPair's first cull, taken
-      // before the memo: most balls rest most of the time).
-      if (j == i || (!translating && !IsTranslating(traj_[j].state))) continue;
-      // And PredictPair's broad phase, also before the memo: the paths' boxes stay apart.
-      if (!Near(box, traj_[j].lo, traj_[j].hi, d_ + kTouchGap + 1e-10)) continue;
+      if (j == i || !MayMeet(translating, box, j)) continue;
       const double horizon = std::min(Window(i), best.t) - t_;
-      consider(PairEvent(i, P, V, box, j, horizon));
+      consider(PairEvent(i, P, V, j, horizon));
     }
     best_[i] = best;
     if (best.found()) Push(best);
@@ -726,7 +738,7 @@ class EventSimulation final : public TableSimulation {
   // collision), re-forming because the resting gap it opened closed.
   double PlasticBelow(int i, int j) const {
     if (o_.resting_contacts != RestingContacts::kSustained) return kRestingContactSpeed;
-    const double last = last_plastic_[static_cast<size_t>(std::min(i, j)) * n_ + std::max(i, j)];
+    const double last = last_plastic_[PairIndex(i, j)];
     return t_ - last <= kRestingTrain ? kTrainContactSpeed : kRestingContactSpeed;
   }
 
@@ -798,13 +810,9 @@ class EventSimulation final : public TableSimulation {
     cluster_moved_.clear();
     near_made_.clear();
     links_.clear();
-    // Every ball's position and velocity now (the group's are updated below).
+    // Every ball's position now (impulses leave positions; the gap passes move them).
     pos_.resize(n_);
-    vel_.resize(n_);
-    for (int j = 0; j < n_; ++j) {
-      pos_[j] = PosAt(j, t_);
-      vel_[j] = VelAt(j, t_);
-    }
+    for (int j = 0; j < n_; ++j) pos_[j] = PosAt(j, t_);
     // Within the largest resting gap (a cheap squared test first).
     const double link = d_ + gap_;
     const double link2 = link * link * (1.0 + 1e-9);
@@ -827,12 +835,12 @@ class EventSimulation final : public TableSimulation {
         ++counts_.ball_ball_push;
       }
       in_pair_[si] = in_pair_[sj] = 1;
-      last_plastic_[static_cast<size_t>(std::min(i, j)) * n_ + std::max(i, j)] = t_;
+      last_plastic_[PairIndex(i, j)] = t_;
     };
     // The group grows from the pair: a ball joins when it is linked to one whose velocity
     // changed (only such a pair can start to approach), with its links to the group's balls.
     // The rest of a cluster (a frozen rack the pair belongs to) is not looked at.
-    const auto expand = [&](size_t k) {
+    const auto expand = [&](size_t k, bool with_links) {
       if (expanded_[k]) return;
       expanded_[k] = 1;
       const Eigen::Vector2d rk = pos_[cluster_[k]];
@@ -840,7 +848,7 @@ class EventSimulation final : public TableSimulation {
         if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
         if (!linked(pos_[j] - rk)) continue;
         const size_t s = static_cast<size_t>(Slot(j));
-        for (size_t q = 0; q < s; ++q) {
+        for (size_t q = 0; with_links && q < s; ++q) {
           if (linked(pos_[j] - pos_[cluster_[q]])) links_.push_back({q, s});
         }
       }
@@ -849,12 +857,14 @@ class EventSimulation final : public TableSimulation {
     {
       const Eigen::Vector2d dp = pos_[ib] - pos_[ia];
       const double dist = dp.norm();
-      if (dist > 0.0) settle = std::max(settle, kSweepSettle * (vel_[ia] - vel_[ib]).dot(dp / dist));
+      if (dist > 0.0) {
+        settle = std::max(settle, kSweepSettle * (VelAt(ia, t_) - VelAt(ib, t_)).dot(dp / dist));
+      }
     }
     resolve(ia, ib);
     if (linked(pos_[ib] - pos_[ia])) links_.push_back({0, 1});
-    expand(0);
-    expand(1);
+    expand(0, true);
+    expand(1, true);
     // Sweeps over the group's touching pairs: each approaching one is resolved. Only pairs
     // with a ball whose velocity changed since the last sweep need a look; the sweeps change
     // velocities only.
@@ -883,7 +893,7 @@ class EventSimulation final : public TableSimulation {
       if (!any) break;
       changed_.swap(changed_now_);
       for (size_t k = 0; k < cluster_.size(); ++k) {
-        if (changed_[k]) expand(k);
+        if (changed_[k]) expand(k, true);
       }
     }
     // A ball the group leaves creeping slower than RestingStopSpeed stops (its roll would end
@@ -908,26 +918,16 @@ class EventSimulation final : public TableSimulation {
     }
     // Resting gaps between the group's balls (each at least the gap that the pair's closing
     // acceleration allows, as after a plastic contact), in a few Gauss-Seidel passes. Moving
-    // balls move; balls at rest too when the pair is jammed: it comes back at the same instant,
-    // or within its train after its gap could not open (a ball wedged between two at rest,
-    // which stop after each contact: the gaps cannot open otherwise, and the pair would be hit
-    // again within microseconds, thousands of times).
-    const bool jammed =
-        (t_ == last_sustained_t_ && ia == last_sustained_a_ && ib == last_sustained_b_) ||
-        t_ - jammed_at_[static_cast<size_t>(ia) * n_ + ib] <= kRestingTrain;
-    last_sustained_t_ = t_;
-    last_sustained_a_ = ia;
-    last_sustained_b_ = ib;
+    // balls move; balls at rest too when the pair is jammed: it comes back within its train
+    // after its gap could not open (a pair back at the same instant is one: it reopened by
+    // less than kTouchGap; a ball wedged between two at rest, which stop after each contact:
+    // the gaps cannot open otherwise, and the pair would be hit again within microseconds,
+    // thousands of times).
+    const bool jammed = t_ - jammed_at_[PairIndex(ia, ib)] <= kRestingTrain;
     const auto movable = [&](int i) {
       return IsTranslating(traj_[i].state) ||
              (jammed && traj_[i].state != MotionState::kPocketed);
     };
-    // The group's positions and velocities after the impulses (the passes move positions;
-    // the other balls' are as they were).
-    for (const int j : cluster_) {
-      pos_[j] = PosAt(j, t_);
-      vel_[j] = VelAt(j, t_);
-    }
     // Whether the ball in slot k can move to p without coming closer than 2R to a ball other
     // than `partner` to which it is not already closer. Only the balls that were within
     // kNearSlack of contact when its list was made can be (the list holds while the shifts
@@ -953,8 +953,7 @@ class EventSimulation final : public TableSimulation {
       }
       // Nor deeper into a cushion or a pocket's capture circle than it is (a ball at rest
       // against a rail may be moved by a jammed pair: it would stay inside, never predicted).
-      const bool clear = p.x() >= clear_.lo.x() && p.x() <= clear_.hi.x() &&
-                         p.y() >= clear_.lo.y() && p.y() <= clear_.hi.y();
+      const bool clear = Within(Box{p, p}, clear_);
       if (!clear && cushions_) {
         for (const CushionSegment& seg : model_.spec().cushions) {
           const double after = (p - ClosestOnSegment(seg.a, seg.b, p)).squaredNorm();
@@ -990,7 +989,7 @@ class EventSimulation final : public TableSimulation {
     for (int pass = 0; pass < kGapPasses; ++pass) {
       bool moved = false;
       for (size_t k = 0; k < cluster_.size(); ++k) {
-        if (active_[k]) expand(k);
+        if (active_[k]) expand(k, false);
       }
       const size_t g = cluster_.size();
       links_.clear();
@@ -1009,7 +1008,9 @@ class EventSimulation final : public TableSimulation {
         const double dist = dp.norm();
         if (!(dist > 0.0) || dist >= link) continue;
         const Eigen::Vector2d n = dp / dist;
-        if ((vel_[j] - vel_[i]).dot(n) >= kRestingContactSpeed) continue;
+        if ((cluster_balls_[q].v - cluster_balls_[k].v).head<2>().dot(n) >= kRestingContactSpeed) {
+          continue;
+        }
         const double size = RestingGap(-(traj_[j].a - traj_[i].a).dot(n), gap_, PlasticBelow(i, j));
         const double open = d_ + size - dist;
         if (!(open > std::max(kGapSlack, kGapShortfall * size))) continue;
@@ -1055,7 +1056,7 @@ class EventSimulation final : public TableSimulation {
       const double size =
           RestingGap(-(traj_[ib].a - traj_[ia].a).dot(n), gap_, PlasticBelow(ia, ib));
       if (dist - d_ < (1.0 - kGapShortfall) * size) {
-        jammed_at_[static_cast<size_t>(ia) * n_ + ib] = t_;
+        jammed_at_[PairIndex(ia, ib)] = t_;
       }
     }
     const size_t g = cluster_.size();
@@ -1197,13 +1198,11 @@ class EventSimulation final : public TableSimulation {
   std::vector<char> in_pair_;        // per slot: in a pair resolved (an impulse or a push)
   std::vector<char> active_;         // per slot: in a pair resolved, or moved by a gap
   std::vector<char> expanded_;       // per slot: its linked balls have joined the group
-  std::vector<Eigen::Vector2d> pos_, vel_;  // every ball's position and velocity at t_
+  std::vector<Eigen::Vector2d> pos_;  // every ball's position at t_ (HandleSustained)
   std::vector<char> changed_, changed_now_;  // per slot: velocity changed in a sweep
   std::vector<std::pair<size_t, size_t>> links_;  // slot pairs near contact (HandleSustained)
   std::vector<std::vector<int>> near_;  // per slot: balls near contact (HandleSustained's free)
   std::vector<double> near_made_;       // per slot: the shifts summed when near_ was made
-  double last_sustained_t_ = -kNever;  // the last sustained contact's time and pair
-  int last_sustained_a_ = -1, last_sustained_b_ = -1;
   std::vector<double> jammed_at_;  // per pair (a * n + b, a < b): when its gap last could not open
   const double gap_;  // the largest resting gap (m)
   const double d_;   // contact distance of two balls (m)
