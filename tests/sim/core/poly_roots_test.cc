@@ -585,7 +585,11 @@ TEST(ProvablyPositiveTest, ProvesClearMinimaOnly) {
   EXPECT_TRUE(proved(FromCoeffs({2.0, 0.0, -1.0, 0.0, 0.25}), 1.5));  // (x^2 - 2)^2 / 4 + 1
   EXPECT_FALSE(proved(FromCoeffs({0.25 - 1e-14, -1.0, 1.0}), 1.0));   // min just below zero
   EXPECT_FALSE(proved(FromCoeffs({0.25, -1.0, 1.0}), 1.0));           // a touch at 0.5
-  EXPECT_FALSE(proved(FromCoeffs({0.25 + 1e-15, -1.0, 1.0}), 1.0));   // min below the margin
+  EXPECT_FALSE(proved(FromCoeffs({0.25 + 1e-15, -1.0, 1.0}), 1.0));   // min just above zero
+  // The margin itself (1e-12 of the largest coefficient): 1e-13 + x is positive on [0, 1], but
+  // its least Bernstein coefficient does not clear the margin; 1e-11 + x does.
+  EXPECT_FALSE(proved(FromCoeffs({1e-13, 1.0}), 1.0));
+  EXPECT_TRUE(proved(FromCoeffs({1e-11, 1.0}), 1.0));
   EXPECT_FALSE(proved(FromRoots({2.0, 3.0}), 2.0));                   // a root at the end
   EXPECT_FALSE(proved(FromCoeffs({-1.0, 0.0, 5.0}), 1.0));            // negative at 0
   EXPECT_FALSE(proved(FromCoeffs({1.0, kInf}), 1.0));                 // not finite
