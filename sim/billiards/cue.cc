@@ -8,6 +8,7 @@
 
 #include "absl/strings/str_format.h"
 #include "sim/billiards/cloth.h"
+#include "sim/billiards/collision.h"
 #include "sim/core/check.h"
 #include "sim/core/units.h"
 
@@ -121,33 +122,25 @@ absl::StatusOr<StrikeOutcome> ComputeStrike(const TableModel& model, uint32_t ef
   return out;
 }
 
-namespace {
-
-// Distance from p to the segment ab.
-double SegmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                       const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * ab)).norm();
-}
-
-}  // namespace
-
 bool InPocketMouth(const TableModel& model, const Eigen::Vector2d& xy) {
   // Clear of every cushion and jaw by the contact distance the engine keeps (a ball at rest
   // against a jaw is that far from its nose line, less than a radius), to the engine's
   // penetration tolerance.
+  const auto near_pocket = [&](const Pocket& pocket) {
+    return (xy - pocket.centre).norm() <= pocket.radius_m + 2.0 * model.radius();
+  };
+  const std::vector<Pocket>& pockets = model.spec().pockets;
+  if (std::none_of(pockets.begin(), pockets.end(), near_pocket)) return false;
   const double clear = model.cushion_contact_distance() - 1e-6;
   const std::vector<CushionSegment>& cushions = model.spec().cushions;
   for (const CushionSegment& c : cushions) {
-    if (SegmentDistance(xy, c.a, c.b) < clear) return false;
+    if ((xy - ClosestOnSegment(c.a, c.b, xy)).norm() < clear) return false;
   }
   const auto cross = [](const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
     return u.x() * v.y() - u.y() * v.x();
   };
-  for (const Pocket& pocket : model.spec().pockets) {
-    if ((xy - pocket.centre).norm() > pocket.radius_m + 2.0 * model.radius()) continue;
+  for (const Pocket& pocket : pockets) {
+    if (!near_pocket(pocket)) continue;
     // Between the jaws: on the pocket's side of both jaw lines (not behind a jaw, inside the
     // rail).
     int inside = 0;
