@@ -455,11 +455,14 @@ class WorldHost {
       if (journal_ != nullptr) {
         durable = WaitDurable(*world, *seat, type, std::move(body), /*remove=*/true);
       }
-      // From here every other call finds the world gone (a second delete too), and nothing of
-      // it is written again (no checkpoint after its removal).
-      if (durable.ok()) world->deleted = true;
-      AfterCall(*world);
-      if (!durable.ok()) return durable;
+      if (!durable.ok()) {
+        AfterCall(*world);
+        return durable;
+      }
+      // From here every other call finds the world gone (a second delete too) and its wakes
+      // are dropped; no call ends after this one (it has no AfterCall), so nothing of the world
+      // is written after its removal (no checkpoint).
+      world->deleted = true;
     }
     {
       absl::MutexLock lock(&mu_);
@@ -969,7 +972,7 @@ class WorldHost {
   // or will be at its next live rest.
   void MaybeCheckpoint(WorldT& w) ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
     const uint64_t every = limits_.checkpoint_every_runs;
-    if (journal_ == nullptr || every == 0 || w.restoring || w.deleted || Kind::Running(w) ||
+    if (journal_ == nullptr || every == 0 || w.restoring || Kind::Running(w) ||
         Kind::Runs(w) - w.checkpointed_runs < every) {
       return;
     }
