@@ -46,7 +46,7 @@
 #include "server/world/journal.h"
 #include "sportsim/store/v1/session_state.pb.h"
 #include "tests/server/fake_sink.h"
-#include "tests/server/field_count.h"
+#include "tests/server/checkpoint_testing.h"
 
 namespace sportsim::server {
 namespace {
@@ -69,8 +69,6 @@ static_assert(CountFields<SessionKind::Data>() == 18,
 // ---------------------------------------------------------------------------------------------
 // Helpers.
 
-double Bits(uint64_t bits) { return std::bit_cast<double>(bits); }
-
 /// Encodes, decodes and compares bit for bit; the decoded state encodes to the same bytes.
 void ExpectRoundTrip(const SessionRestState& s, const std::string& what) {
   const std::string bytes = EncodeSessionRestState(s);
@@ -79,13 +77,6 @@ void ExpectRoundTrip(const SessionRestState& s, const std::string& what) {
   EXPECT_TRUE(SameSessionRestState(s, *back)) << what << ": "
                                               << SessionRestStateDifference(s, *back);
   EXPECT_EQ(EncodeSessionRestState(*back), bytes) << what;
-}
-
-/// The message a checkpoint holds (its 5-byte trailer dropped).
-st::SessionRestState Parsed(const std::string& bytes) {
-  st::SessionRestState m;
-  EXPECT_TRUE(m.ParseFromString(bytes.substr(0, bytes.size() - 5)));
-  return m;
 }
 
 /// A store's journal, in memory: every entry, and every checkpoint in the order written.
@@ -360,8 +351,11 @@ TEST_F(SessionCheckpointTest, RealCheckpointsHoldTheSessionAtEachCheckpointedSwi
     EXPECT_EQ(info.gamma_deg(), 130.0);
     // It covers the journal up to the swing's end: the next entry starts the next swing.
     ASSERT_LT(written[c].index, entries.size());
-    EXPECT_EQ(entries[written[c].index - 1].index, written[c].index);
-    EXPECT_GE(entries[written[c].index].tick, state.tick);
+    const JournalEntry& next = entries[written[c].index];  // entries are numbered from 1
+    ASSERT_EQ(next.index, written[c].index + 1);
+    EXPECT_THAT(static_cast<SessionCommand>(next.type),
+                ::testing::AnyOf(SessionCommand::kStart, SessionCommand::kDriveStart));
+    EXPECT_GE(next.tick, state.tick);
   }
   // Swing 6 was scheduled after driven swing 4: its torques in force are the chapter's at the
   // end, not the driver's.
@@ -519,14 +513,8 @@ TEST(SessionCheckpointValuesTest, IntegersStringsPhasesAndAbsentParametersRoundT
 }
 
 TEST(SessionCheckpointValuesTest, VersionAndTrailerAreWritten) {
-  const std::string bytes = EncodeSessionRestState(SessionRestState{});
-  ASSERT_GE(bytes.size(), 5u);
-  EXPECT_EQ(static_cast<uint8_t>(bytes[bytes.size() - 5]), 0x7D);
-  st::SessionRestState m;
-  ASSERT_TRUE(m.ParseFromString(bytes));  // the trailer is the proto's field 15
-  EXPECT_EQ(m.version(), kSessionCheckpointVersion);
-  EXPECT_EQ(m.crc32c(), checkpoint::Crc32c(bytes.substr(0, bytes.size() - 5)));
-  EXPECT_EQ(checkpoint::Crc32c("123456789"), 0xE3069283u);  // the standard check value
+  ExpectVersionAndTrailer<st::SessionRestState>(EncodeSessionRestState(SessionRestState{}),
+                                               kSessionCheckpointVersion);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -541,29 +529,14 @@ TEST_F(SessionCheckpointTest, DamagedCheckpointsAreRefusedNamingTheField) {
   ASSERT_EQ(written.size(), 1u);
   const std::string bytes = written[0].state;
 
-  for (size_t n = 0; n < bytes.size(); ++n) {
-    absl::StatusOr<SessionRestState> back = DecodeSessionRestState(bytes.substr(0, n));
-    ASSERT_FALSE(back.ok()) << "a prefix of " << n << " of " << bytes.size() << " bytes decoded";
-    EXPECT_EQ(back.status().code(), absl::StatusCode::kDataLoss) << back.status();
-    EXPECT_THAT(back.status().message(), HasSubstr("session checkpoint: "));
-  }
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    for (int bit = 0; bit < 8; ++bit) {
-      std::string damaged = bytes;
-      damaged[i] = static_cast<char>(damaged[i] ^ (1 << bit));
-      absl::StatusOr<SessionRestState> back = DecodeSessionRestState(damaged);
-      ASSERT_FALSE(back.ok()) << "bit " << bit << " of byte " << i << " flipped, decoded";
-      EXPECT_EQ(back.status().code(), absl::StatusCode::kDataLoss) << back.status();
-    }
-  }
-  EXPECT_FALSE(DecodeSessionRestState(bytes + "x").ok());
+  ExpectEveryPrefixAndFlipRefused(bytes, DecodeSessionRestState, "session checkpoint: ");
   std::string flipped = bytes;
   flipped[10] = static_cast<char>(flipped[10] ^ 0x40);
   EXPECT_THAT(DecodeSessionRestState(flipped).status().message(),
               HasSubstr("crc32c "));
 
   // Hand-made damage, sealed with a valid trailer.
-  const st::SessionRestState good = Parsed(bytes);
+  const st::SessionRestState good = Parsed<st::SessionRestState>(bytes);
   ASSERT_TRUE(DecodeSessionRestState(checkpoint::Seal(good)).ok());
   for (uint32_t v : {0u, 2u, 0xFFFFFFFFu}) {
     st::SessionRestState m = good;
@@ -627,7 +600,7 @@ TEST_F(SessionCheckpointTest, ARestoreFromADamagedCheckpointIsDataLoss) {
   const std::vector<MemoryJournal::Written> written = journal_.checkpoints(s.session_id());
   ASSERT_EQ(written.size(), 1u);
   const int64_t reached = infos.back().tick();
-  const st::SessionRestState good = Parsed(written[0].state);
+  const st::SessionRestState good = Parsed<st::SessionRestState>(written[0].state);
 
   struct Case {
     std::string name;

@@ -45,7 +45,7 @@
 #include "sim/games/game.h"
 #include "sportsim/store/v1/table_state.pb.h"
 #include "sportsim/v1/billiards.pb.h"
-#include "tests/server/field_count.h"
+#include "tests/server/checkpoint_testing.h"
 
 namespace sportsim::server {
 namespace {
@@ -96,13 +96,6 @@ std::string Seal(std::string body) {
 
 std::string Seal(const st::TableRestState& m) { return Seal(m.SerializeAsString()); }
 
-/// The message an encoding holds (its trailer dropped).
-st::TableRestState Parsed(const std::string& bytes) {
-  st::TableRestState m;
-  EXPECT_TRUE(m.ParseFromString(bytes.substr(0, bytes.size() - 5)));
-  return m;
-}
-
 /// Encodes, decodes and compares bit for bit; the decoded state encodes to the same bytes.
 void ExpectRoundTrip(const TableRestState& s, const std::string& what) {
   const std::string bytes = EncodeTableRestState(s);
@@ -112,8 +105,6 @@ void ExpectRoundTrip(const TableRestState& s, const std::string& what) {
   EXPECT_EQ(RestStateDifference(s, *back), "") << what;
   EXPECT_EQ(EncodeTableRestState(*back), bytes) << what;
 }
-
-double Bits(uint64_t bits) { return std::bit_cast<double>(bits); }
 
 // ---------------------------------------------------------------------------------------------
 // A table as TableRegistry keeps it, played by a seeded bot on the real engine and referees.
@@ -828,14 +819,9 @@ TEST(TableCheckpointTest, LongStringsAndManyEntriesRoundTrip) {
 }
 
 TEST(TableCheckpointTest, VersionAndTrailerAreWritten) {
-  const std::string bytes = EncodeTableRestState(TableRestState{});
-  ASSERT_GE(bytes.size(), 5u);
-  EXPECT_EQ(static_cast<uint8_t>(bytes[bytes.size() - 5]), 0x7D);
-  st::TableRestState m;
-  ASSERT_TRUE(m.ParseFromString(bytes));  // the trailer is the proto's field 15
-  EXPECT_EQ(m.version(), kTableCheckpointVersion);
-  EXPECT_EQ(m.crc32c(), Crc32c(bytes.substr(0, bytes.size() - 5)));
-  EXPECT_EQ(Crc32c("123456789"), 0xE3069283u);  // the standard check value
+  ExpectVersionAndTrailer<st::TableRestState>(EncodeTableRestState(TableRestState{}),
+                                             kTableCheckpointVersion);
+  EXPECT_EQ(Crc32c("123456789"), 0xE3069283u);  // this file's own CRC, which seals below
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -850,23 +836,7 @@ TableRestState RealState() {
 TEST(TableCheckpointTest, EveryPrefixAndEveryFlippedBitIsRefused) {
   const TableRestState s = RealState();
   const std::string bytes = EncodeTableRestState(s);
-  for (size_t n = 0; n < bytes.size(); ++n) {
-    absl::StatusOr<TableRestState> back = DecodeTableRestState(bytes.substr(0, n));
-    ASSERT_FALSE(back.ok()) << "prefix of " << n << " of " << bytes.size() << " bytes decoded";
-    EXPECT_EQ(back.status().code(), absl::StatusCode::kDataLoss) << back.status();
-    EXPECT_THAT(back.status().message(), HasSubstr("table checkpoint: "));
-  }
-  for (size_t i = 0; i < bytes.size(); ++i) {
-    for (int bit = 0; bit < 8; ++bit) {
-      std::string damaged = bytes;
-      damaged[i] = static_cast<char>(damaged[i] ^ (1 << bit));
-      absl::StatusOr<TableRestState> back = DecodeTableRestState(damaged);
-      ASSERT_FALSE(back.ok()) << "bit " << bit << " of byte " << i << " flipped, decoded";
-      EXPECT_EQ(back.status().code(), absl::StatusCode::kDataLoss) << back.status();
-    }
-  }
-  // Extra bytes after the trailer: the trailer is no longer last.
-  EXPECT_FALSE(DecodeTableRestState(bytes + "x").ok());
+  ExpectEveryPrefixAndFlipRefused(bytes, DecodeTableRestState, "table checkpoint: ");
   EXPECT_FALSE(DecodeTableRestState(bytes + bytes).ok());
   absl::StatusOr<TableRestState> empty = DecodeTableRestState("");
   ASSERT_FALSE(empty.ok());
@@ -888,7 +858,7 @@ TEST(TableCheckpointTest, ChecksumMismatchIsNamed) {
 }
 
 TEST(TableCheckpointTest, OtherVersionsAreRefused) {
-  const st::TableRestState good = Parsed(EncodeTableRestState(RealState()));
+  const st::TableRestState good = Parsed<st::TableRestState>(EncodeTableRestState(RealState()));
   EXPECT_TRUE(DecodeSealed(good).ok());
   for (uint32_t v : {0u, 2u, 1000u, 0xFFFFFFFFu}) {
     st::TableRestState m = good;
@@ -902,7 +872,7 @@ TEST(TableCheckpointTest, OtherVersionsAreRefused) {
 }
 
 TEST(TableCheckpointTest, StructuralDamageIsNamed) {
-  const st::TableRestState good = Parsed(EncodeTableRestState(RealState()));
+  const st::TableRestState good = Parsed<st::TableRestState>(EncodeTableRestState(RealState()));
   ASSERT_GE(good.record_size(), 2);
   ASSERT_GE(good.rest().balls_size(), 2);
   struct Case {
