@@ -18,6 +18,7 @@
 #include "server/world/scheduler.h"
 #include "server/swing/session_world.h"
 #include "server/billiards/table_world.h"
+#include "server/store/store.h"
 #include "server/world/world.h"
 
 namespace sportsim::server {
@@ -258,7 +259,8 @@ class Collector final : public prometheus::Collectable {
                        "Journal write transactions committed (each one sync to disk)",
                        j.batches},
             std::tuple{"sportsim_journal_writes_total",
-                       "Journal writes committed (commands, creations, deletions, checkpoints)",
+                       "Journal writes in committed batches, refused ones included (commands, "
+                       "creations, deletions, checkpoints)",
                        j.ops},
             std::tuple{"sportsim_journal_failed_commits_total",
                        "Journal write transactions that failed (their commands were refused)",

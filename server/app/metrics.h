@@ -14,7 +14,6 @@
 
 #include "absl/status/statusor.h"
 #include "absl/synchronization/mutex.h"
-#include "server/store/store.h"
 
 namespace grpc::experimental {
 class ServerInterceptorFactoryInterface;
@@ -25,6 +24,10 @@ class Exposer;
 }  // namespace prometheus
 
 namespace sportsim::server {
+
+namespace store {
+class Store;
+}  // namespace store
 
 class TableRegistry;
 class SessionRegistry;

@@ -63,9 +63,9 @@ class Store : public Journal {
   /// bumped in the same transaction, so those nodes can no longer write) and returns them.
   /// SQLite: none.
   virtual absl::StatusOr<std::vector<StoredWorld>> Adopt() = 0;
-  /// "sqlite:DIR/journal.db" or "postgresql:host:port/db node NAME" (no password), for logs.
   /// Its counters, for /metrics.
   virtual StoreStats stats() const = 0;
+  /// "sqlite:DIR/journal.db" or "postgresql:host:port/db node NAME" (no password), for logs.
   virtual std::string Describe() const = 0;
   /// Stops the background threads after committing what is queued and persisting the clock
   /// the node reached; later writes are UNAVAILABLE. SQLite: the data directory is released.
