@@ -323,17 +323,13 @@ class WorldHost {
   /// is replayed, nothing is written.
   absl::Status Commit(WorldT& w, int seat, uint32_t type, std::string body)
       ABSL_EXCLUSIVE_LOCKS_REQUIRED(w.mu) {
-    const int64_t tick = w.NowTick();
-    if (w.restoring || journal_ == nullptr) {
-      w.pinned_tick = tick;
-      ++w.journal_index;
-      return absl::OkStatus();
-    }
-    w.pinned_tick = tick;
-    absl::Status durable = WaitDurable(w, seat, type, std::move(body), /*remove=*/false);
-    if (!durable.ok()) {
-      w.pinned_tick.reset();
-      return durable;
+    w.pinned_tick = w.NowTick();
+    if (!w.restoring && journal_ != nullptr) {
+      absl::Status durable = WaitDurable(w, seat, type, std::move(body), /*remove=*/false);
+      if (!durable.ok()) {
+        w.pinned_tick.reset();
+        return durable;
+      }
     }
     ++w.journal_index;
     return absl::OkStatus();
