@@ -19,12 +19,35 @@ void EvalWithDerivative(const double* c, int degree, double x, double* p, double
   *dp = d;
 }
 
+// The root of a quadratic (c[2] != 0) in [l, h], where it is monotone, by the stable form of
+// the quadratic formula (Press et al., Numerical Recipes, 3rd ed., section 5.6): both roots
+// without cancellation. A starting point only: near a double root, where the discriminant
+// rounds below zero, it gives the vertex. NaN when neither root lies in [l, h].
+double QuadraticRootIn(const double* c, double l, double h) {
+  const double disc = std::max(0.0, c[1] * c[1] - 4.0 * c[2] * c[0]);
+  const double q = -0.5 * (c[1] + std::copysign(std::sqrt(disc), c[1]));
+  const double r1 = q / c[2];
+  if (r1 >= l && r1 <= h) return r1;
+  const double r2 = c[0] / q;
+  if (r2 >= l && r2 <= h) return r2;
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 // The root of p in [a, b], where p is monotone and p(a), p(b) have opposite signs.
 double Refine(const double* c, int degree, double a, double b, double fa) {
+  const double l0 = std::min(a, b), h0 = std::max(a, b);
+  // A line's root is one division (rounded once), kept in the bracket.
+  if (degree == 1) return std::clamp(-c[0] / c[1], l0, h0);
   // Keep lo on the side where p has the sign of p(a).
   double lo = a, hi = b;
   const bool neg_at_lo = fa < 0;
   double x = 0.5 * (lo + hi);
+  // A quadratic's Newton iterations start from its closed-form root: at most a few units in
+  // the last place off, so that one step confirms it.
+  if (degree == 2) {
+    const double r = QuadraticRootIn(c, l0, h0);
+    if (r > l0 && r < h0) x = r;
+  }
   for (int it = 0; it < 200; ++it) {
     double f, df;
     EvalWithDerivative(c, degree, x, &f, &df);
@@ -56,7 +79,11 @@ int Degree(const double* c, int degree) {
 int MonotonePieces(const double* c, int degree, double lo, double hi, double* x) {
   int m = 0;
   x[m++] = lo;
-  if (degree >= 2) {
+  if (degree == 2) {
+    // A quadratic's one critical point, its vertex, directly.
+    const double v = -c[1] / (2.0 * c[2]);
+    if (v > lo && v < hi) x[m++] = v;
+  } else if (degree > 2) {
     double d[kMaxPolyDegree];
     for (int k = 1; k <= degree; ++k) d[k - 1] = k * c[k];
     double crit[kMaxPolyDegree];
@@ -156,6 +183,29 @@ double FirstDownCrossing(const double* c, int degree, double lo, double hi) {
   // From lo = 0 only (every engine search): a shift to another lo would add rounding the
   // margin does not bound.
   if (lo == 0.0 && ProvablyPositive(c, degree, hi)) return kNever;
+  // A p that is positive at 0 and provably convex on [0, hi] (p'' passes ProvablyPositive)
+  // needs no critical points: Newton's iterates from 0 rise to its first root, never past it
+  // (each tangent lies under a convex p, so the tangent's zero comes no later than p's), and
+  // without a root in [0, hi] they pass hi or p's minimum (p' >= 0 there, p still positive).
+  // Two thirds of the pair searches that reach this point are such (a contact ahead, or a
+  // near miss, of two balls whose relative path bends away from neither).
+  if (lo == 0.0 && degree >= 3 && c[0] > 0.0) {
+    double d2[kMaxPolyDegree - 1];
+    for (int k = 2; k <= degree; ++k) d2[k - 2] = k * (k - 1) * c[k];
+    if (ProvablyPositive(d2, degree - 2, hi)) {
+      double x = 0.0, f = c[0], df = c[1];
+      for (int it = 0; it < 64; ++it) {
+        if (!(df < 0.0)) return kNever;
+        const double next = x - f / df;
+        if (!(next <= hi)) return kNever;
+        if (next - x <= 4.0 * std::numeric_limits<double>::epsilon() * next) return next;
+        x = next;
+        EvalWithDerivative(c, degree, x, &f, &df);
+        if (!(f > 0.0)) return x;  // at the root, within rounding
+      }
+      // Slow convergence (a grazing double root): the general search below decides.
+    }
+  }
   double x[kMaxPolyDegree + 1];
   const int m = MonotonePieces(c, degree, lo, hi, x);
   double fa = PolyEval(c, degree, x[0]);

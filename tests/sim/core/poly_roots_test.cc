@@ -660,6 +660,61 @@ TEST(FirstDownCrossingTest, NearMissesAndNearHitsAgainstTheTrueMinimum) {
               proofs);
 }
 
+// A decelerating approach, x(s) = x0 - v s + a s^2 / 2 with a lateral offset h: p = x^2 + h^2
+// - d^2 is convex while x > 0 (p'' = 2 (x'^2 + a x)), the case FirstDownCrossing answers by
+// Newton's method from 0 without critical points. Against the closed form of the first contact,
+// x = L = sqrt(d^2 - h^2) at s = 2 (x0 - L) / (v + sqrt(v^2 - 2 a (x0 - L))) (the root of the
+// stored coefficients, near it, is the reference), and a miss (the approach stops short of L)
+// by a margin of 1e-6 of the speed.
+TEST(FirstDownCrossingTest, ConvexApproachesMatchTheClosedForm) {
+  std::mt19937_64 rng(0x636f6e76);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double d = 0.05715;
+  int hits = 0, misses = 0;
+  for (int trial = 0; trial < 5000; ++trial) {
+    const double h = d * 0.99 * unit(rng);
+    const double L = std::sqrt(d * d - h * h);
+    const double x0 = L + std::pow(10.0, -7.0 + 6.0 * unit(rng));  // 0.1 um to 10 cm to go
+    const double a = 0.01 + 5.0 * unit(rng);
+    // Speeds between just missing and just hitting, and up to stopping at x = 0 (x > 0 keeps p
+    // convex on the whole window [0, v / a]).
+    const double v_hit = std::sqrt(2.0 * a * (x0 - L)), v_max = std::sqrt(2.0 * a * x0);
+    const bool hit = trial % 2 == 0;
+    const double v = hit ? v_hit * (1.0 + 1e-6) + (v_max - v_hit) * 0.999 * unit(rng)
+                         : v_hit * (1.0 - 1e-6) * unit(rng);
+    const double S = v / a;
+    const Poly p = FromCoeffs({(x0 - d) * (x0 + d) + h * h, -2.0 * x0 * v, v * v + a * x0,
+                               -a * v, 0.25 * a * a});
+    const double d2[3] = {2.0 * p.c[2], 6.0 * p.c[3], 12.0 * p.c[4]};
+    ASSERT_TRUE(ProvablyPositive(d2, 2, S)) << "trial " << trial << ": not the convex case";
+    const double x = FirstDown(p, 0.0, S);
+    if (hit) {
+      // The closed form, then polished by Newton in long double on the stored coefficients
+      // (whose rounding moves the root of a contact 0.1 um away by about 1e-11 of it).
+      const double closed = 2.0 * (x0 - L) / (v + std::sqrt(v * v - 2.0 * a * (x0 - L)));
+      long double r = closed;
+      for (int it = 0; it < 4; ++it) {
+        long double f = p.c[4], df = 0.0L;
+        for (int k = 3; k >= 0; --k) {
+          df = df * r + f;
+          f = f * r + p.c[k];
+        }
+        r -= f / df;
+      }
+      const double want = static_cast<double>(r);
+      EXPECT_NEAR(want, closed, 1e-9 * closed) << "trial " << trial;
+      EXPECT_NEAR(x, want, RootTol(p, want)) << "trial " << trial;
+      ++hits;
+    } else {
+      EXPECT_EQ(x, kInf) << "trial " << trial << ": stops " << x0 - v * v / (2.0 * a) - L
+                         << " m short";
+      ++misses;
+    }
+  }
+  EXPECT_EQ(hits, 2500);
+  EXPECT_EQ(misses, 2500);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The physical case: ball-ball contact times
 
