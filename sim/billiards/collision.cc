@@ -126,10 +126,12 @@ void StopCreep(const TableModel& model, uint32_t effects, Ball* b) {
   b->state = Classify(model, *b);
 }
 
-bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
+bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b,
+                         double relax) {
   Eigen::Vector3d n, v_rel;
   double approach = 0.0;
   if (!Closing(*a, *b, &n, &v_rel, &approach)) return false;
+  const double target = relax * approach;
   const PhysicsParams& p = model.params();
   const double m = model.mass();
   const double radius = model.radius();
@@ -150,14 +152,14 @@ bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Bal
       kt = (Response(model, ra, -t, rca) - Response(model, rb, t, rcb)).dot(n);
     }
   }
-  // approach + jn kn + pt kt = 0 with pt = min(mu jn, cap): linear on each branch.
-  double jn = -approach / (kn + mu * kt);
+  // target + jn kn + pt kt = 0 with pt = min(mu jn, cap): linear on each branch.
+  double jn = -target / (kn + mu * kt);
   double pt = mu * jn;
   if (!(jn > 0.0) || pt > cap) {
     pt = cap;
-    jn = -(approach + cap * kt) / kn;
+    jn = -(target + cap * kt) / kn;
     if (!(jn > 0.0)) {
-      jn = -approach / kn;  // friction alone would part them: no friction
+      jn = -target / kn;  // friction alone would part them: no friction
       pt = 0.0;
     }
     pt = std::min(pt, mu * jn);

@@ -53,8 +53,11 @@ bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 /// plastic one for these effective masses (7/5 m on the rolling manifold, m sliding: no normal
 /// relative velocity after), friction as in CollideBalls (TP A-14, capped at sticking); every
 /// part only removes energy. Returns false when the balls are not approaching faster than
-/// kMinApproachSpeed. (The event engine, RestingContacts::kSustained in engine.h.)
-bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
+/// kMinApproachSpeed. (The event engine, RestingContacts::kSustained in engine.h.) `relax`
+/// (in [1, 2)) scales the impulse for the approach: the pair then parts at (relax - 1) times
+/// it, as the over-relaxed sweeps over a group of contacts want.
+bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Ball* b,
+                         double relax = 1.0);
 
 /// A ball that a sustained contact leaves rolling slower than RestingStopSpeed = sqrt(2 d mu_r
 /// g), d = kRestingStopDistance (0.14 mm/s at the defaults), stops at once (StopCreep): rolling
