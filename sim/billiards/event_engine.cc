@@ -200,6 +200,10 @@ class EventSimulation final : public TableSimulation {
     jammed_at_.assign(memo_.size(), -kNever);
     slot_of_.assign(state_.balls.size(), -1);
     if (model.spec().bounded) clear_ = ClearOfTheRails();
+    for (const CushionSegment& seg : model.spec().cushions) {
+      const Eigen::Vector2d lo = seg.a.cwiseMin(seg.b), hi = seg.a.cwiseMax(seg.b);
+      cushion_reach_.push_back(Box{lo.array() - dc_, hi.array() + dc_});
+    }
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
     for (int i = 0; i < n_; ++i) Predict(i);
   }
@@ -490,7 +494,6 @@ class EventSimulation final : public TableSimulation {
                          const Eigen::Vector2d& V, const Eigen::Vector2d& A) const {
     Pending p{.kind = Kind::kCushion, .a = i, .other = k, .va = traj_[i].version};
     const CushionSegment& seg = model_.spec().cushions[k];
-    if (!Near(box, seg.a.cwiseMin(seg.b), seg.a.cwiseMax(seg.b), dc_)) return p;
     const Eigen::Vector2d e = seg.b - seg.a;
     const double len2 = e.squaredNorm();
     const double lambda0 = len2 > 0.0 ? (P - seg.a).dot(e) / len2 : 0.0;
@@ -643,8 +646,15 @@ class EventSimulation final : public TableSimulation {
       const double S = Window(i) - t_;
       const Eigen::Vector2d& A = tr.a;
       if (cushions_) {
+        // The segments' boxes grown by the contact distance (cushion_reach_) cull first.
         const int nc = static_cast<int>(model_.spec().cushions.size());
-        for (int k = 0; k < nc; ++k) consider(PredictCushion(i, k, box, S, P, V, A));
+        for (int k = 0; k < nc; ++k) {
+          const Box& r = cushion_reach_[k];
+          if (box.lo.x() <= r.hi.x() && box.hi.x() >= r.lo.x() && box.lo.y() <= r.hi.y() &&
+              box.hi.y() >= r.lo.y()) {
+            consider(PredictCushion(i, k, box, S, P, V, A));
+          }
+        }
       }
       if (pockets_) {
         const int np = static_cast<int>(model_.spec().pockets.size());
@@ -979,6 +989,7 @@ class EventSimulation final : public TableSimulation {
       const bool clear = Within(Box{p, p}, clear_);
       if (!clear && cushions_) {
         for (const CushionSegment& seg : model_.spec().cushions) {
+          if (!Near(Box{p, p}, seg.a.cwiseMin(seg.b), seg.a.cwiseMax(seg.b), dc_)) continue;
           const double after = (p - ClosestOnSegment(seg.a, seg.b, p)).squaredNorm();
           if (after < dc_ * dc_ &&
               after < (pos_[i] - ClosestOnSegment(seg.a, seg.b, pos_[i])).squaredNorm()) {
@@ -1195,6 +1206,7 @@ class EventSimulation final : public TableSimulation {
     bool translating;
   };
   std::vector<Reach> reach_;
+  std::vector<Box> cushion_reach_;  // each cushion segment's box grown by dc_
   std::vector<Pending> best_;  // each ball's earliest predicted event
   // The last prediction of each pair (a < b, at a * n + b): its contact time (kNever: none up
   // to `until`) for the trajectory versions it was made from.

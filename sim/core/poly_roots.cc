@@ -135,6 +135,9 @@ constexpr BernsteinRatios kBernsteinRatios;
 // call passes has no sign change the search below could have found either: it only saves the
 // search. Most predictions in a billiards shot are such pairs (near, but moving apart).
 bool ProvablyPositive(const double* c, int degree, double hi) {
+  // The first two Bernstein coefficients, p(0) and p(0) + p'(0) hi / n, decide most failures
+  // (an approach) before the scaling below; a margin never rescues a coefficient <= 0.
+  if (!(c[0] > 0.0) || (degree >= 1 && !(c[0] + c[1] * hi / degree > 0.0))) return false;
   double a[kMaxPolyDegree + 1];  // p(hi t) = sum a_k t^k, t in [0, 1]
   double scale = 1.0, largest = 0.0;
   for (int k = 0; k <= degree; ++k) {
