@@ -205,7 +205,11 @@ class EventSimulation final : public TableSimulation {
       cushion_reach_.push_back(Box{lo.array() - dc_, hi.array() + dc_});
     }
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
-    for (int i = 0; i < n_; ++i) Predict(i);
+    // A ball at rest has no event of its own, and every contact it can have is with a moving
+    // ball, whose prediction finds it: only the moving balls are predicted at the start.
+    for (int i = 0; i < n_; ++i) {
+      if (traj_[i].state != MotionState::kStationary) Predict(i);
+    }
   }
 
   absl::Status AdvanceTo(double t_end, std::vector<Event>* events) override {

@@ -184,8 +184,8 @@ double FirstDownCrossing(const double* c, int degree, double lo, double hi) {
   degree = Degree(c, degree);
   if (degree == 0 || !(lo <= hi)) return kNever;
   // From lo = 0 only (every engine search): a shift to another lo would add rounding the
-  // margin does not bound.
-  if (lo == 0.0 && ProvablyPositive(c, degree, hi)) return kNever;
+  // margin does not bound. Not for a line or a quadratic: their search is as cheap as the proof.
+  if (lo == 0.0 && degree > 2 && ProvablyPositive(c, degree, hi)) return kNever;
   // A p that is positive at 0 and provably convex on [0, hi] (p'' passes ProvablyPositive)
   // needs no critical points: Newton's iterates from 0 rise to its first root, never past it
   // (each tangent lies under a convex p, so the tangent's zero comes no later than p's), and
