@@ -85,8 +85,12 @@ struct Pending {
 
   bool found() const { return t < kNever; }
   bool Involves(int i) const { return a == i || b == i; }
-  bool Before(const Pending& o) const {
-    return std::tie(t, kind, a, b, other) < std::tie(o.t, o.kind, o.a, o.b, o.other);
+  bool Before(const Pending& o) const {  // (t, kind, a, b, other) lexicographically
+    if (t != o.t) return t < o.t;
+    if (kind != o.kind) return kind < o.kind;
+    if (a != o.a) return a < o.a;
+    if (b != o.b) return b < o.b;
+    return other < o.other;
   }
 };
 // Heap order: the earliest event (by the total order above) at the front.
@@ -152,13 +156,13 @@ Box PathBox(const Eigen::Vector2d& p, const Eigen::Vector2d& v, const Eigen::Vec
   box.lo = box.lo.cwiseMin(end);
   box.hi = box.hi.cwiseMax(end);
   for (int k = 0; k < 2; ++k) {
-    if (a[k] != 0.0) {
+    // The turning point s = -v / a, where it lies inside (0, S): v and a of opposite signs and
+    // |v| < |a| S (tested without the division).
+    if (v[k] * a[k] < 0.0 && std::abs(v[k]) < std::abs(a[k]) * S) {
       const double s = -v[k] / a[k];
-      if (s > 0.0 && s < S) {
-        const double x = p[k] + s * (v[k] + 0.5 * s * a[k]);
-        box.lo[k] = std::min(box.lo[k], x);
-        box.hi[k] = std::max(box.hi[k], x);
-      }
+      const double x = p[k] + s * (v[k] + 0.5 * s * a[k]);
+      box.lo[k] = std::min(box.lo[k], x);
+      box.hi[k] = std::max(box.hi[k], x);
     }
   }
   return box;

@@ -134,13 +134,14 @@ constexpr BernsteinRatios kBernsteinRatios;
 // the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
 // call passes has no sign change the search below could have found either: it only saves the
 // search. Most predictions in a billiards shot are such pairs (near, but moving apart).
-bool ProvablyPositive(const double* c, int degree, double hi) {
-  // The first two Bernstein coefficients, p(0) and p(0) + p'(0) hi / n, decide most failures
-  // (an approach) before the scaling below; a margin never rescues a coefficient <= 0.
-  if (!(c[0] > 0.0) || (degree >= 1 && !(c[0] + c[1] * hi / degree > 0.0))) return false;
-  double a[kMaxPolyDegree + 1];  // p(hi t) = sum a_k t^k, t in [0, 1]
+namespace {
+
+// ProvablyPositive for a degree known at compile time (the loops unroll).
+template <int kDegree>
+bool ProvablyPositiveOf(const double* c, double hi) {
+  double a[kDegree + 1];  // p(hi t) = sum a_k t^k, t in [0, 1]
   double scale = 1.0, largest = 0.0;
-  for (int k = 0; k <= degree; ++k) {
+  for (int k = 0; k <= kDegree; ++k) {
     a[k] = c[k] * scale;
     scale *= hi;
     largest = std::max(largest, std::abs(a[k]));
@@ -148,13 +149,33 @@ bool ProvablyPositive(const double* c, int degree, double hi) {
   if (!(largest < std::numeric_limits<double>::infinity())) return false;
   const double margin = 1e-12 * largest;
   // b_i = sum_{k <= i} C(i, k) / C(n, k) a_k.
-  const auto& ratio = kBernsteinRatios[degree];
-  for (int i = 0; i <= degree; ++i) {
+  const auto& ratio = kBernsteinRatios[kDegree];
+  for (int i = 0; i <= kDegree; ++i) {
     double b = 0.0;
     for (int k = 0; k <= i; ++k) b += ratio[i][k] * a[k];
     if (!(b > margin)) return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool ProvablyPositive(const double* c, int degree, double hi) {
+  // The first two Bernstein coefficients, p(0) and p(0) + p'(0) hi / n (here times n), decide
+  // most failures (an approach) before the scaling; a margin never rescues one <= 0.
+  if (!(c[0] > 0.0) || (degree >= 1 && !(degree * c[0] + c[1] * hi > 0.0))) return false;
+  switch (degree) {
+    case 0:
+      return ProvablyPositiveOf<0>(c, hi);
+    case 1:
+      return ProvablyPositiveOf<1>(c, hi);
+    case 2:
+      return ProvablyPositiveOf<2>(c, hi);
+    case 3:
+      return ProvablyPositiveOf<3>(c, hi);
+    default:
+      return ProvablyPositiveOf<4>(c, hi);
+  }
 }
 
 int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots) {
