@@ -19,6 +19,14 @@ void EvalWithDerivative(const double* c, int degree, double x, double* p, double
   *dp = d;
 }
 
+// sum |c_k| |x|^k: the scale of the rounding in evaluating p at x.
+double AbsEval(const double* c, int degree, double x) {
+  const double ax = std::abs(x);
+  double f = std::abs(c[degree]);
+  for (int k = degree - 1; k >= 0; --k) f = f * ax + std::abs(c[k]);
+  return f;
+}
+
 // The root of a quadratic (c[2] != 0) in [l, h], where it is monotone, by the stable form of
 // the quadratic formula (Press et al., Numerical Recipes, 3rd ed., section 5.6): both roots
 // without cancellation. A starting point only: near a double root, where the discriminant
@@ -33,15 +41,22 @@ double QuadraticRootIn(const double* c, double l, double h) {
   return std::numeric_limits<double>::quiet_NaN();
 }
 
-// The root of p in [a, b], where p is monotone and p(a), p(b) have opposite signs.
-double Refine(const double* c, int degree, double a, double b, double fa) {
-  const double l0 = std::min(a, b), h0 = std::max(a, b);
+// The root of p in [a, b] (a < b), where p is monotone and p(a) = fa, p(b) = fb have opposite
+// signs. `to_noise`: stop where p(x) is within its rounding (a crossing time); otherwise run to
+// a rounding-level step (a critical point, where p' must reach exactly 0 for a double root of
+// p to show as p == 0).
+double Refine(const double* c, int degree, double a, double b, double fa, double fb,
+              bool to_noise) {
+  const double l0 = a, h0 = b;
   // A line's root is one division (rounded once), kept in the bracket.
   if (degree == 1) return std::clamp(-c[0] / c[1], l0, h0);
   // Keep lo on the side where p has the sign of p(a).
   double lo = a, hi = b;
   const bool neg_at_lo = fa < 0;
-  double x = 0.5 * (lo + hi);
+  // Newton starts from the chord's root (regula falsi): on a monotone piece it is inside the
+  // bracket and, unlike the midpoint, already near a root that is near an end.
+  double x = a - fa * ((b - a) / (fb - fa));
+  if (!(x > a && x < b)) x = 0.5 * (lo + hi);
   // A quadratic's Newton iterations start from its closed-form root: at most a few units in
   // the last place off, so that one step confirms it.
   if (degree == 2) {
@@ -52,6 +67,13 @@ double Refine(const double* c, int degree, double a, double b, double fa) {
     double f, df;
     EvalWithDerivative(c, degree, x, &f, &df);
     if (f == 0.0) return x;
+    // Below Horner's rounding bound (2d u sum |c_k| |x|^k, Higham 5.1) the sign of p(x) says
+    // nothing: x is as good a root as the arithmetic can tell, and bisecting on noise would
+    // only spend iterations.
+    if (to_noise &&
+        std::abs(f) <= degree * std::numeric_limits<double>::epsilon() * AbsEval(c, degree, x)) {
+      return x;
+    }
     if ((f < 0) == neg_at_lo) {
       lo = x;
     } else {
@@ -193,7 +215,7 @@ int PolyRootsIn(const double* c, int degree, double lo, double hi, double* roots
       // with p == 0 are one root (the first of them), so there are never more than `degree`.
       if (fa != 0.0) roots[n++] = x[k];
     } else if (fa != 0.0 && (fa < 0) != (fb < 0)) {
-      roots[n++] = Refine(c, degree, x[k - 1], x[k], fa);
+      roots[n++] = Refine(c, degree, x[k - 1], x[k], fa, fb, /*to_noise=*/false);
     }
     fa = fb;
   }
@@ -236,7 +258,7 @@ double FirstDownCrossing(const double* c, int degree, double lo, double hi) {
   for (int k = 1; k < m; ++k) {
     const double fb = PolyEval(c, degree, x[k]);
     if (fa > 0.0 && fb <= 0.0) {
-      return fb == 0.0 ? x[k] : Refine(c, degree, x[k - 1], x[k], fa);
+      return fb == 0.0 ? x[k] : Refine(c, degree, x[k - 1], x[k], fa, fb, /*to_noise=*/true);
     }
     fa = fb;
   }
