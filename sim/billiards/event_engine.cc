@@ -94,11 +94,6 @@ struct Pending {
     return other < o.other;
   }
 };
-// Heap order: the earliest event (by the total order above) at the front.
-struct Later {
-  bool operator()(const Pending& x, const Pending& y) const { return y.Before(x); }
-};
-
 // A ball's motion since its last event: constant accelerations from (t0, r0, v0, w0).
 struct Trajectory {
   double t0 = 0.0;
@@ -200,6 +195,7 @@ class EventSimulation final : public TableSimulation {
               0.5 * model.spec().width_m + model.radius()) {
     resting_.resize(state_.balls.size());
     reach_.resize(state_.balls.size());
+    queue_at_.assign(state_.balls.size(), -1);
     memo_.resize(state_.balls.size() * state_.balls.size());
     last_plastic_.assign(memo_.size(), -kNever);
     jammed_at_.assign(memo_.size(), -kNever);
@@ -222,11 +218,12 @@ class EventSimulation final : public TableSimulation {
       return absl::InvalidArgumentError(absl::StrFormat(
           "t_end_s must be finite and not before the table's time %g s, got %g", t_, t_end));
     }
-    while (!heap_.empty() && heap_.front().t <= t_end) {
-      const Pending e = heap_.front();
-      std::pop_heap(heap_.begin(), heap_.end(), Later());
-      heap_.pop_back();
-      if (!Current(e)) continue;
+    while (!queue_.empty() && best_[queue_.front()].t <= t_end) {
+      const Pending e = best_[queue_.front()];
+      if (!Current(e)) {  // never expected (a ball's change re-predicts its partners)
+        Predict(queue_.front());
+        continue;
+      }
       if (++processed_ > o_.max_events) {
         return absl::ResourceExhaustedError(absl::StrFormat(
             "event cap of %d reached at t = %.9f s (next: %s of ball %s%s): a runaway, or raise "
@@ -238,7 +235,6 @@ class EventSimulation final : public TableSimulation {
       t_ = e.t;
       dirty_ = true;
       if (absl::Status s = Handle(e, events); !s.ok()) return s;
-      if (heap_.size() > 8 * static_cast<size_t>(n_) + 64) Compact();
     }
     t_ = t_end;
     dirty_ = true;
@@ -634,6 +630,7 @@ class EventSimulation final : public TableSimulation {
     Pending best{.kind = Kind::kTransition, .a = i, .va = tr.version};
     if (tr.state == MotionState::kPocketed) {
       best_[i] = best;
+      Schedule(i);
       return;
     }
     if (IsMoving(tr.state)) {
@@ -681,21 +678,61 @@ class EventSimulation final : public TableSimulation {
       consider(PairEvent(i, P, V, j, horizon));
     }
     best_[i] = best;
-    if (best.found()) Push(best);
+    Schedule(i);
   }
 
-  void Push(const Pending& p) {
-    heap_.push_back(p);
-    std::push_heap(heap_.begin(), heap_.end(), Later());
-  }
-
-  // Drops stale predictions: the heap is rebuilt from each ball's current best.
-  void Compact() {
-    heap_.clear();
-    for (const Pending& p : best_) {
-      if (p.found() && Current(p)) heap_.push_back(p);
+  // The event queue: a binary heap of the balls with a predicted event, ordered by their
+  // best_ (earliest first, by Pending's total order), with each ball's place in it. A ball's
+  // entry moves when Predict replaces its best, so the queue never holds a stale event (every
+  // change of a ball re-predicts it and the balls whose best involved it): at most one entry
+  // a ball, and a pair's contact in both balls' entries until it is handled.
+  void Schedule(int i) {
+    int k = queue_at_[i];
+    if (!best_[i].found()) {
+      if (k < 0) return;
+      const int last = queue_.back();
+      queue_.pop_back();
+      queue_at_[i] = -1;
+      if (last == i) return;
+      queue_[k] = last;
+      queue_at_[last] = k;
+      SiftDown(SiftUp(k));
+      return;
     }
-    std::make_heap(heap_.begin(), heap_.end(), Later());
+    if (k < 0) {
+      k = static_cast<int>(queue_.size());
+      queue_.push_back(i);
+      queue_at_[i] = k;
+    }
+    SiftDown(SiftUp(k));
+  }
+  int SiftUp(int k) {
+    const int i = queue_[k];
+    while (k > 0) {
+      const int parent = (k - 1) / 2;
+      if (!best_[i].Before(best_[queue_[parent]])) break;
+      queue_[k] = queue_[parent];
+      queue_at_[queue_[k]] = k;
+      k = parent;
+    }
+    queue_[k] = i;
+    queue_at_[i] = k;
+    return k;
+  }
+  void SiftDown(int k) {
+    const int n = static_cast<int>(queue_.size());
+    const int i = queue_[k];
+    while (true) {
+      int child = 2 * k + 1;
+      if (child >= n) break;
+      if (child + 1 < n && best_[queue_[child + 1]].Before(best_[queue_[child]])) ++child;
+      if (!best_[queue_[child]].Before(best_[i])) break;
+      queue_[k] = queue_[child];
+      queue_at_[queue_[k]] = k;
+      k = child;
+    }
+    queue_[k] = i;
+    queue_at_[i] = k;
   }
 
   bool Current(const Pending& p) const {
@@ -1226,7 +1263,8 @@ class EventSimulation final : public TableSimulation {
   };
   std::vector<PairMemo> memo_;
   std::vector<double> last_plastic_;  // per pair (a * n + b, a < b): its last plastic contact
-  std::vector<Pending> heap_;
+  std::vector<int> queue_;     // the event queue (Schedule)
+  std::vector<int> queue_at_;  // each ball's place in queue_, -1: none
   double t_;
   bool dirty_ = true;
   int64_t processed_ = 0;
