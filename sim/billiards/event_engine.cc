@@ -109,6 +109,9 @@ struct Trajectory {
   // Where the path goes from its origin to its next transition (the whole plane when that is
   // beyond the prediction horizon): the pairs' broad phase (a ball at rest: its position).
   Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();
+  // lo, hi are the path's box from t0 to its next transition exactly as Predict would make it
+  // at t0 (not moved since, and the transition within the prediction horizon).
+  bool box_at_t0 = false;
   uint32_t version = 0;
   bool fixed_axis = true;  // the spin axis does not turn: orientation in closed form
   // Orientation at t0 + q_k * q_piece (a cache of a pure function of the segment).
@@ -305,11 +308,13 @@ class EventSimulation final : public TableSimulation {
     tr.q_k = 0;
     tr.q_cached = tr.q0;
     tr.lo = tr.hi = tr.r0;
+    tr.box_at_t0 = false;
     if (IsTranslating(tr.state)) {
       if (tr.t_next <= t + kPredictionHorizon) {
         const Box box = PathBox(tr.r0, tr.v0, tr.a, tr.t_next - t);
         tr.lo = box.lo;
         tr.hi = box.hi;
+        tr.box_at_t0 = true;
       } else {
         // The path outlasts the prediction horizon (no rolling resistance): predictions look
         // from later times, further along it, than one box from here could cover.
@@ -335,6 +340,7 @@ class EventSimulation final : public TableSimulation {
     tr.r0 += by;
     tr.lo += by;
     tr.hi += by;
+    tr.box_at_t0 = false;  // moved: Predict's box from the new r0 rounds differently
     SetReach(i);
   }
 
@@ -646,8 +652,11 @@ class EventSimulation final : public TableSimulation {
       if (c.found() && c.Before(best)) best = c;
     };
     const Eigen::Vector2d P = PosAt(i, t_), V = VelAt(i, t_);
-    // Where i goes from now to the end of its window.
-    const Box box = IsTranslating(tr.state) ? PathBox(P, V, tr.a, Window(i) - t_) : Box{P, P};
+    // Where i goes from now to the end of its window (at the path's start, the box SetOrigin
+    // made: the same numbers).
+    const Box box = !IsTranslating(tr.state)           ? Box{P, P}
+                    : tr.box_at_t0 && t_ == tr.t0 ? Box{tr.lo, tr.hi}
+                                                  : PathBox(P, V, tr.a, Window(i) - t_);
     if (IsTranslating(tr.state) && model_.spec().bounded && !Within(box, clear_)) {
       const double S = Window(i) - t_;
       const Eigen::Vector2d& A = tr.a;
