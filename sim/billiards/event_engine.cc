@@ -297,8 +297,9 @@ class EventSimulation final : public TableSimulation {
       tr.v0.setZero();
       if (b.state == MotionState::kStationary) tr.w0.setZero();
     }
-    const double cross = tr.w0.cross(tr.alpha).norm();
-    tr.fixed_axis = cross <= 1e-12 * tr.w0.norm() * tr.alpha.norm();
+    // How OrientationAt integrates (nothing to set up when the orientation is off).
+    tr.fixed_axis = !orientation_ ||
+                    tr.w0.cross(tr.alpha).norm() <= 1e-12 * tr.w0.norm() * tr.alpha.norm();
     if (!tr.fixed_axis) {
       // |w| is largest at an end of the segment (it is linear in time).
       const double span = std::min(tr.t_next, t + kPredictionHorizon) - t;
