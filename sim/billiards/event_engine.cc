@@ -39,15 +39,18 @@ constexpr double kSweepApproach = 1e-6;
 constexpr double kSweepSettle = 1e-3;
 // The sweeps' over-relaxation: each pair they resolve gets this times the plastic impulse,
 // parting at 0.3 times its approach (the pair that starts the group gets the plastic one).
-// Gauss-Seidel on a group's contacts converges like that on a chain's: the approaches left fall
-// by cos^2(pi / n) a sweep for n balls in a line (0.5 for four: 10 sweeps to settle), and
-// successive over-relaxation with w near 2 / (1 + sin(pi / n)) (Young, "Iterative methods for
-// solving partial difference equations of elliptic type", Trans. AMS 76, 1954; projected, for
-// contacts that only push: Cryer, SIAM J. Control 9, 1971) cuts the sweeps by about three. That
-// w is 1.26 for five balls and 1.45 for eight; 1.3 takes 14 % off the storm batch's work, and
-// a slow push into a frozen line of five ends closer to its closed form than without (0.9 %
-// against 1.5 %). 1.5 overshoots there (the pairs part by more than the sweeps then close).
-// Every resolution still only removes energy (the pair's restitution is w - 1 < 1).
+// Sequential plastic impulses on a group's contacts converge like Gauss-Seidel on a chain's:
+// the approaches left fall by cos^2(pi / n) a sweep for n balls in a line (0.5 for four: 10
+// sweeps to settle), and successive over-relaxation with w near 2 / (1 + sin(pi / n)) (Young,
+// "Iterative methods for solving partial difference equations of elliptic type", Trans. AMS
+// 76, 1954) cuts the sweeps by about three. Unlike projected SOR (Cryer, SIAM J. Control 9,
+// 1971) no impulse is ever taken back: the sweeps add impulse to approaching pairs only, so
+// they end with pairs parting at up to w - 1 of their last approach, a restitution of w - 1 in
+// place of the exact plastic solution (which plain Gauss-Seidel reaches no better within its
+// settling threshold). The optimum w is 1.26 for five balls and 1.45 for eight; 1.3 takes 14 %
+// off the storm batch's work, and a slow push into a frozen line of five ends closer to its
+// closed form than without (0.9 % against 1.5 %). 1.5 overshoots there (the pairs part by
+// more than the sweeps then close). Every resolution still only removes energy.
 constexpr double kSweepRelaxation = 1.3;
 // Gauss-Seidel passes that open the resting gaps inside a group.
 constexpr int kGapPasses = 8;
@@ -501,7 +504,8 @@ class EventSimulation final : public TableSimulation {
     return p;
   }
 
-  // Ball i against cushion segment k.
+  // Ball i against cushion segment k, whose grown box (cushion_reach_) the path box `box`
+  // meets: the caller culls.
   Pending PredictCushion(int i, int k, const Box& box, double S, const Eigen::Vector2d& P,
                          const Eigen::Vector2d& V, const Eigen::Vector2d& A) const {
     Pending p{.kind = Kind::kCushion, .a = i, .other = k, .va = traj_[i].version};
@@ -630,7 +634,7 @@ class EventSimulation final : public TableSimulation {
     return Box{Eigen::Vector2d::Constant(kNever), Eigen::Vector2d::Constant(-kNever)};
   }
 
-  // Ball i's earliest event from now, pushed on the heap.
+  // Ball i's earliest event from now, in best_ and the event queue (Schedule).
   void Predict(int i) {
     ++counts_.predictions;
     const Trajectory& tr = traj_[i];
@@ -880,12 +884,12 @@ class EventSimulation final : public TableSimulation {
   // a sustained contact of its group (RestingContacts::kSustained; docs/billiards.md, "Resting
   // contacts"): the group grows from the pair through the balls linked (gaps below the
   // sustained resting gap) to a ball whose velocity changed; the pair and then every pair of
-  // the group that approaches (slower than PlasticBelow, faster than the sweeps' settling
-  // speed) are resolved by CollideBallsResting in sweeps (projected Gauss-Seidel on the
-  // plastic contacts) until none does, all at this instant and as one event; creeping balls
-  // stop (StopCreep); then the resting gaps of the balls moved open, and only the balls that
-  // changed are predicted again. A pair of the group found approaching faster is a real
-  // collision: left to the queue, which has it when the pair touches.
+  // the group that approaches (faster than the sweeps' settling speed) are resolved by
+  // CollideBallsResting in over-relaxed sweeps (kSweepRelaxation) until none does, all at this
+  // instant and as one event; creeping balls stop (StopCreep); then the resting gaps of the
+  // balls moved open, and only the balls that changed are predicted again. A pair of the group
+  // that was approaching faster than PlasticBelow before the event is a real collision: left
+  // to the queue, which has it when the pair touches.
   void HandleSustained(int ia, int ib, std::vector<Event>* events) {
     for (const int i : cluster_) slot_of_[i] = -1;
     cluster_.clear();
@@ -911,7 +915,8 @@ class EventSimulation final : public TableSimulation {
     };
     const auto resolve = [&](int i, int j, double relax) {
       const int si = Slot(i), sj = Slot(j);
-      if (CollideBallsResting(model_, o_.effects, &cluster_balls_[si], &cluster_balls_[sj], relax)) {
+      if (CollideBallsResting(model_, o_.effects, &cluster_balls_[si], &cluster_balls_[sj],
+                              relax)) {
         ++counts_.sustained_contacts;
         // Reported as the first contact of the pair's train only (Report, kRestingTrain).
         const bool ri = Report(i, j, /*plastic=*/true), rj = Report(j, i, /*plastic=*/true);
@@ -974,7 +979,11 @@ class EventSimulation final : public TableSimulation {
         const double approach = (bk.v - bq.v).head<2>().dot(dp / dist);
         if (approach <= settle) continue;
         const int i = cluster_[k], j = cluster_[q];
-        if (approach >= PlasticBelow(i, j)) continue;
+        const double limit = PlasticBelow(i, j);
+        // A pair that was approaching that fast before this event is a real collision, left to
+        // the queue; one that only the sweeps sped up (the over-relaxed impulses overshoot
+        // downstream for a sweep or two) stays part of this sustained contact.
+        if (approach >= limit && (VelAt(i, t_) - VelAt(j, t_)).dot(dp / dist) >= limit) continue;
         resolve(std::min(i, j), std::max(i, j), kSweepRelaxation);
         changed_now_[k] = changed_now_[q] = 1;
         any = true;

@@ -25,9 +25,10 @@
 //   dissipation off (that would turn the plastic resting contacts elastic and make clusters
 //   bounce); we collapse the fast cloth answers, which only dissipates.
 // - The balls in contact are resolved together, as one event: every approaching pair of the
-//   group (balls linked by gaps below kSustainedRestingGap) by sweeps of plastic contact
-//   impulses (projected Gauss-Seidel, the simultaneous treatment of a resting contact group in
-//   rigid-body simulation), which moves a group pushed slowly as one body.
+//   group (balls linked by gaps below kSustainedRestingGap) by over-relaxed sweeps of contact
+//   impulses (sequential impulses, the simultaneous treatment of a resting contact group in
+//   rigid-body simulation, with successive over-relaxation), which moves a group pushed slowly
+//   as one body.
 // - Within kRestingTrain of a pair's last plastic contact, a contact of the pair continues it
 //   (TC's rule, per pair): plastic below kTrainContactSpeed, with the resting gap sized for
 //   that (kSustainedRestingGap at most), so a push re-forms its contact a few times less often.

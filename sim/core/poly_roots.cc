@@ -249,7 +249,8 @@ double FirstDownCrossing(const double* c, int degree, double lo, double hi) {
         if (next - x <= 4.0 * std::numeric_limits<double>::epsilon() * next) return next;
         x = next;
         EvalWithDerivative(c, degree, x, &f, &df);
-        if (!(f > 0.0)) return x;  // at the root, within rounding
+        if (f <= 0.0) return x;  // at the root, within rounding
+        if (!(f > 0.0)) return kNever;  // NaN: no answer to give
       }
       // Slow convergence (a grazing double root): the general search below decides.
     }

@@ -713,6 +713,13 @@ TEST(FirstDownCrossingTest, ConvexApproachesMatchTheClosedForm) {
   }
   EXPECT_EQ(hits, 2500);
   EXPECT_EQ(misses, 2500);
+  // A cubic: -(x - 1)(x - 2)(x - 3) is positive at 0 with p'' = 12 - 6x > 0 on [0, 1.5], so
+  // the same path answers its first root, 1; over [0, 0.9] there is none.
+  const Poly cubic = FromRoots({1.0, 2.0, 3.0}, -1.0);
+  const double d2[2] = {2.0 * cubic.c[2], 6.0 * cubic.c[3]};
+  ASSERT_TRUE(ProvablyPositive(d2, 1, 1.5));
+  EXPECT_NEAR(FirstDown(cubic, 0.0, 1.5), 1.0, RootTol(cubic, 1.0));
+  EXPECT_EQ(FirstDown(cubic, 0.0, 0.9), kInf);
 }
 
 // ---------------------------------------------------------------------------------------------
