@@ -53,11 +53,9 @@ constexpr double kSweepSettle = 1e-3;
 constexpr double kSweepRelaxation = 1.3;
 // Gauss-Seidel passes that open the resting gaps inside a group.
 constexpr int kGapPasses = 8;
-// A resting gap short of its size by less than a quarter of it, or by less than kGapSlack (m),
-// is left as it is: a shorter gap only re-forms sooner and slower (still plastic), and the
+// A resting gap short of its size by less than a quarter of it is left as it is: a shorter gap only re-forms sooner and slower (still plastic), and the
 // passes converge geometrically (a ball between two halves what is left of both gaps each
 // pass), so chasing the rest ran most groups to the pass limit.
-constexpr double kGapSlack = 1e-12;
 constexpr double kGapShortfall = 0.25;
 // The gap passes check a move against the balls within this (m) of contact: moves are mostly
 // resting gaps (at most kSustainedRestingGap each), so a list stays good for several (its
@@ -168,6 +166,11 @@ Box PathBox(const Eigen::Vector2d& p, const Eigen::Vector2d& v, const Eigen::Vec
   }
   return box;
 }
+// Do the boxes overlap (edges included)?
+bool Overlaps(const Box& a, const Box& b) {
+  return a.lo.x() <= b.hi.x() && a.hi.x() >= b.lo.x() && a.lo.y() <= b.hi.y() &&
+         a.hi.y() >= b.lo.y();
+}
 // Is the box inside `region` (edges included)?
 bool Within(const Box& box, const Box& region) {
   return box.lo.x() >= region.lo.x() && box.hi.x() <= region.hi.x() &&
@@ -205,11 +208,11 @@ class EventSimulation final : public TableSimulation {
     last_plastic_.assign(memo_.size(), -kNever);
     jammed_at_.assign(memo_.size(), -kNever);
     slot_of_.assign(state_.balls.size(), -1);
-    if (model.spec().bounded) clear_ = ClearOfTheRails();
     for (const CushionSegment& seg : model.spec().cushions) {
       const Eigen::Vector2d lo = seg.a.cwiseMin(seg.b), hi = seg.a.cwiseMax(seg.b);
       cushion_reach_.push_back(Box{lo.array() - dc_, hi.array() + dc_});
     }
+    if (model.spec().bounded) clear_ = ClearOfTheRails();  // from cushion_reach_
     for (int i = 0; i < n_; ++i) SetOrigin(i, state_.balls[i], t_);
     // A ball at rest has no event of its own, and every contact it can have is with a moving
     // ball, whose prediction finds it: only the moving balls are predicted at the start.
@@ -613,12 +616,10 @@ class EventSimulation final : public TableSimulation {
   Box ClearOfTheRails() const {
     const TableSpec& spec = model_.spec();
     Eigen::Vector2d half(0.5 * spec.length_m - dc_, 0.5 * spec.width_m - dc_);
+    // (A segment's ends lie in its box: the box test covers them.)
     const auto clear = [&](const Box& r) {
-      for (const CushionSegment& seg : spec.cushions) {
-        if (Near(r, seg.a.cwiseMin(seg.b), seg.a.cwiseMax(seg.b), dc_)) return false;
-        for (const Eigen::Vector2d& q : {seg.a, seg.b}) {
-          if (Near(r, q, q, dc_)) return false;
-        }
+      for (const Box& c : cushion_reach_) {
+        if (Overlaps(r, c)) return false;
       }
       for (const Pocket& pk : spec.pockets) {
         if (Near(r, pk.centre, pk.centre, pk.radius_m)) return false;
@@ -668,11 +669,7 @@ class EventSimulation final : public TableSimulation {
         // The segments' boxes grown by the contact distance (cushion_reach_) cull first.
         const int nc = static_cast<int>(model_.spec().cushions.size());
         for (int k = 0; k < nc; ++k) {
-          const Box& r = cushion_reach_[k];
-          if (box.lo.x() <= r.hi.x() && box.hi.x() >= r.lo.x() && box.lo.y() <= r.hi.y() &&
-              box.hi.y() >= r.lo.y()) {
-            consider(PredictCushion(i, k, box, S, P, V, A));
-          }
+          if (Overlaps(box, cushion_reach_[k])) consider(PredictCushion(i, k, box, S, P, V, A));
         }
       }
       if (pockets_) {
@@ -860,6 +857,12 @@ class EventSimulation final : public TableSimulation {
     }
   }
 
+  // The resting gap balls i and j (new trajectories set) should have along n, from i to j:
+  // what the cloth's closing acceleration allows for the pair's plastic speed.
+  double GapSize(int i, int j, const Eigen::Vector2d& n) const {
+    return RestingGap(-(traj_[j].a - traj_[i].a).dot(n), gap_, PlasticBelow(i, j));
+  }
+
   // The slot of ball i in the cluster being resolved (its state at t_ on first use).
   int Slot(int i) {
     if (slot_of_[i] >= 0) return slot_of_[i];
@@ -869,7 +872,6 @@ class EventSimulation final : public TableSimulation {
     Eval(i, t_, &cluster_balls_.back());
     cluster_from_.push_back(cluster_balls_.back().state);
     in_pair_.push_back(0);
-    active_.push_back(0);
     expanded_.push_back(0);
     changed_.push_back(0);
     changed_now_.push_back(0);
@@ -889,13 +891,13 @@ class EventSimulation final : public TableSimulation {
   // balls moved open, and only the balls that changed are predicted again. A pair of the group
   // that was approaching faster than PlasticBelow before the event is a real collision: left
   // to the queue, which has it when the pair touches.
-  void HandleSustained(int ia, int ib, std::vector<Event>* events) {
+  // `start`: the pair's normal approach speed now (HandleBalls').
+  void HandleSustained(int ia, int ib, double start, std::vector<Event>* events) {
     for (const int i : cluster_) slot_of_[i] = -1;
     cluster_.clear();
     cluster_balls_.clear();
     cluster_from_.clear();
     in_pair_.clear();
-    active_.clear();
     expanded_.clear();
     changed_.clear();
     changed_now_.clear();
@@ -946,14 +948,8 @@ class EventSimulation final : public TableSimulation {
         }
       }
     };
-    double settle = kSweepApproach;  // the sweeps resolve pairs approaching faster than this
-    {
-      const Eigen::Vector2d dp = pos_[ib] - pos_[ia];
-      const double dist = dp.norm();
-      if (dist > 0.0) {
-        settle = std::max(settle, kSweepSettle * (VelAt(ia, t_) - VelAt(ib, t_)).dot(dp / dist));
-      }
-    }
+    // The sweeps resolve pairs approaching faster than this.
+    const double settle = std::max(kSweepApproach, kSweepSettle * start);
     resolve(ia, ib, 1.0);
     if (linked(pos_[ib] - pos_[ia])) links_.push_back({0, 1});
     expand(0, true);
@@ -1052,8 +1048,10 @@ class EventSimulation final : public TableSimulation {
       // against a rail may be moved by a jammed pair: it would stay inside, never predicted).
       const bool clear = Within(Box{p, p}, clear_);
       if (!clear && cushions_) {
-        for (const CushionSegment& seg : model_.spec().cushions) {
-          if (!Near(Box{p, p}, seg.a.cwiseMin(seg.b), seg.a.cwiseMax(seg.b), dc_)) continue;
+        const std::vector<CushionSegment>& segs = model_.spec().cushions;
+        for (size_t c = 0; c < segs.size(); ++c) {
+          if (!Overlaps(Box{p, p}, cushion_reach_[c])) continue;
+          const CushionSegment& seg = segs[c];
           const double after = (p - ClosestOnSegment(seg.a, seg.b, p)).squaredNorm();
           if (after < dc_ * dc_ &&
               after < (pos_[i] - ClosestOnSegment(seg.a, seg.b, pos_[i])).squaredNorm()) {
@@ -1077,23 +1075,21 @@ class EventSimulation final : public TableSimulation {
       MoveOrigin(i, by);
       pos_[i] += by;
       shifted += by.norm();
-      active_[k] = 1;
     };
-    // The gaps to open are those of the balls an impulse or a gap moved ("active"): the
-    // passes look at the pairs with an active ball, and a ball that a gap moves brings its
+    // The gaps to open are those of the balls an impulse or a gap moved (cluster_moved_): the
+    // passes look at the pairs with such a ball, and a ball that a gap moves brings its
     // neighbours in for the next pass.
-    for (size_t k = 0; k < cluster_.size(); ++k) active_[k] = in_pair_[k];
     const double reach = (link + kNearSlack) * (link + kNearSlack);
     for (int pass = 0; pass < kGapPasses; ++pass) {
       bool moved = false;
       for (size_t k = 0; k < cluster_.size(); ++k) {
-        if (active_[k]) expand(k, false);
+        if (cluster_moved_[k]) expand(k, false);
       }
       const size_t g = cluster_.size();
       links_.clear();
       for (size_t k = 0; k < g; ++k) {
         for (size_t q = k + 1; q < g; ++q) {
-          if ((active_[k] || active_[q]) &&
+          if ((cluster_moved_[k] || cluster_moved_[q]) &&
               (pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach) {
             links_.push_back({k, q});
           }
@@ -1102,16 +1098,16 @@ class EventSimulation final : public TableSimulation {
       for (const auto& [k, q] : links_) {
         const int i = cluster_[k], j = cluster_[q];
         const Eigen::Vector2d dp = pos_[j] - pos_[i];
-        if (!(dp.squaredNorm() < link2)) continue;
+        if (!linked(dp)) continue;
         const double dist = dp.norm();
-        if (!(dist > 0.0) || dist >= link) continue;
+        if (!(dist > 0.0)) continue;
         const Eigen::Vector2d n = dp / dist;
         if ((cluster_balls_[q].v - cluster_balls_[k].v).head<2>().dot(n) >= kRestingContactSpeed) {
           continue;
         }
-        const double size = RestingGap(-(traj_[j].a - traj_[i].a).dot(n), gap_, PlasticBelow(i, j));
+        const double size = GapSize(i, j, n);
         const double open = d_ + size - dist;
-        if (!(open > std::max(kGapSlack, kGapShortfall * size))) continue;
+        if (!(open > kGapShortfall * size)) continue;
         // Both move half the way, or one all of it; never into a deeper overlap with a third
         // ball (the pair then keeps its gap, and the queue resolves it if it closes).
         const bool mi = movable(i), mj = movable(j);
@@ -1140,10 +1136,8 @@ class EventSimulation final : public TableSimulation {
       const bool ma = movable(ia), mb = movable(ib);
       if (dist > 0.0 && open > 0.0 && (ma || mb)) {
         const Eigen::Vector2d step = ((ma && mb ? 0.5 : 1.0) * open / dist) * dp;
-        for (size_t k = 0; k < cluster_.size(); ++k) {
-          if (cluster_[k] == ia && ma) shift(k, -step);
-          if (cluster_[k] == ib && mb) shift(k, step);
-        }
+        if (ma) shift(0, -step);  // the pair's slots: resolve(ia, ib) made them first
+        if (mb) shift(1, step);
       }
     }
     // Whether the pair's gap stayed short of its size (by more than the passes leave).
@@ -1151,9 +1145,7 @@ class EventSimulation final : public TableSimulation {
       const Eigen::Vector2d dp = pos_[ib] - pos_[ia];
       const double dist = dp.norm();
       const Eigen::Vector2d n = dist > 0.0 ? Eigen::Vector2d(dp / dist) : Eigen::Vector2d::Zero();
-      const double size =
-          RestingGap(-(traj_[ib].a - traj_[ia].a).dot(n), gap_, PlasticBelow(ia, ib));
-      if (dist - d_ < (1.0 - kGapShortfall) * size) {
+      if (dist - d_ < (1.0 - kGapShortfall) * GapSize(ia, ib, n)) {
         jammed_at_[PairIndex(ia, ib)] = t_;
       }
     }
@@ -1179,7 +1171,7 @@ class EventSimulation final : public TableSimulation {
       if (approach < PlasticBelow(ia, ib)) {
         ++counts_.ball_ball;
         ++counts_.ball_ball_plastic;
-        HandleSustained(ia, ib, events);
+        HandleSustained(ia, ib, approach, events);
         return;
       }
     }
@@ -1301,9 +1293,8 @@ class EventSimulation final : public TableSimulation {
   std::vector<int> slot_of_;  // per ball: its slot in cluster_, or -1
   std::vector<Ball> cluster_balls_;
   std::vector<MotionState> cluster_from_;
-  std::vector<char> cluster_moved_;  // per slot: new trajectory set
+  std::vector<char> cluster_moved_;  // per slot: new trajectory set (an impulse or a gap move)
   std::vector<char> in_pair_;        // per slot: in a pair resolved (an impulse or a push)
-  std::vector<char> active_;         // per slot: in a pair resolved, or moved by a gap
   std::vector<char> expanded_;       // per slot: its linked balls have joined the group
   std::vector<Eigen::Vector2d> pos_;  // every ball's position at t_ (HandleSustained)
   std::vector<char> changed_, changed_now_;  // per slot: velocity changed in a sweep
