@@ -427,8 +427,8 @@ TEST(EventEngineTest, SlowPushMovesAFrozenLineTogether) {
 // at equal heights), so whatever the contact treatment, the final rolling speeds average to
 // exactly v0 - s/7. The sustained contact re-forms a train of plastic contacts, each after the
 // cloth closed a resting gap of at most kSustainedRestingGap at mu_s g: no more of them than
-// t_e / sqrt(2 gap / (mu_s g)), and the pushed ball stays within 20 um of the continuous one
-// (9 um at the 3 um gaps; 5 um at 1 um: the error grows as sqrt(gap)).
+// t_e / sqrt(2 gap / (mu_s g)) (and a few transitions), and the pushed ball stays within 12 um
+// of the continuous one (9 um at the 3 um gaps; 5 um at 1 um: the error grows as sqrt(gap)).
 TEST(EventEngineTest, SlidingPushMatchesTheContinuousContact) {
   const TableModel m = Model("unbounded");
   const PhysicsParams& p = m.params();
@@ -456,15 +456,17 @@ TEST(EventEngineTest, SlidingPushMatchesTheContinuousContact) {
               "contact, speeds %.3e m/s apart\n",
               static_cast<long long>(sim->events_processed()), bound,
               out.balls[1].r.x() - xb, va - vb);
-  EXPECT_NEAR(out.balls[1].r.x(), xb, 2e-5);
-  EXPECT_LE(sim->events_processed(), 1.5 * bound + 10);
+  EXPECT_NEAR(out.balls[1].r.x(), xb, 1.2e-5);
+  EXPECT_LE(sim->events_processed(), bound + 5);
 }
 
 // A ball rolling slowly into the gap between two balls at rest, whose contact normals are 1.5
 // degrees from opposite (a snooker shot of the 10,000-shot test ended this way): it wedges them
 // apart. Each contact leaves the two pushed creeping far below the resting stop speed, but the
-// wedge keeps pushing them: stopped at once, they were hit again 10 us later, 2,600 times. They
-// creep apart instead, and the three come to rest, without overlap or energy gain.
+// wedge keeps pushing them: stopped at once, they were hit again 10 us later, 2,600 times. Now
+// the pair is jammed after its gap could not open, the balls at rest move with the gap, and
+// the wedge drives them about 15 um apart in 8 events; the three come to rest, without overlap
+// or energy gain.
 TEST(EventEngineTest, BallWedgingTwoAtRestApartDoesNotStorm) {
   const TableModel m = Model("unbounded");
   const double R = m.radius(), d = 2 * R, th = DegToRad(0.75), v = 0.014;
@@ -487,8 +489,8 @@ TEST(EventEngineTest, BallWedgingTwoAtRestApartDoesNotStorm) {
               static_cast<long long>(sim->events_processed()),
               out.balls[2].r.x() - out.balls[0].r.x() - 2 * d * std::cos(th));
   EXPECT_TRUE(sim->AtRest());
-  EXPECT_GT(out.balls[2].r.x() - out.balls[0].r.x(), 2 * d * std::cos(th));
-  EXPECT_LE(sim->events_processed(), 100);
+  EXPECT_GT(out.balls[2].r.x() - out.balls[0].r.x(), 2 * d * std::cos(th) + 1e-5);
+  EXPECT_LE(sim->events_processed(), 25);
 }
 
 // The same wedge against the middle of a short rail: the ball it pushes towards the rail is
@@ -514,7 +516,7 @@ TEST(EventEngineTest, WedgeAgainstARailDoesNotPushABallIntoTheCushion) {
               static_cast<long long>(sim->events_processed()), worst);
   EXPECT_TRUE(sim->AtRest());
   EXPECT_LE(worst, 1e-12);
-  EXPECT_LE(sim->events_processed(), 100);
+  EXPECT_LE(sim->events_processed(), 25);
 }
 
 // The storm batch (bench/billiards_storms.h): 1000 seeded random shots from the tight 8-ball
@@ -658,7 +660,8 @@ TEST(EventEngineTest, EightBallBreakIsCleanDeterministicAndPinned) {
 // 10,000 seeded random shots across the six presets (jittered racks, random speed, direction,
 // elevation and tip offset): nothing non-finite, no overlap beyond 1e-6 m, no penetration of a
 // cushion beyond 1e-6 m, kinetic energy never rising between ticks, every ball on the cloth or
-// in a pocket, rest reached on bounded tables, and no event cap.
+// in a pocket, rest reached on bounded tables, no event cap, and no shot over 3,000 events
+// handled (the storm bound; measured 816, and 14,342 with the hops).
 TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
   constexpr double kTol = 1e-6;          // the bound on overlap and penetration (m)
   constexpr double kEnergyRel = 1e-12;   // rounding of a sum of squares
@@ -724,6 +727,7 @@ TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
     }
   }
   EXPECT_GE(shots, 9900);
+  EXPECT_LE(most, 3000);
   std::printf("%d shots, %lld events (most in one shot %lld), worst overlap %.3g m, worst "
               "cushion penetration %.3g m\n",
               shots, static_cast<long long>(events), static_cast<long long>(most), worst_overlap,
