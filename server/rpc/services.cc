@@ -310,22 +310,27 @@ class SwingService final : public v1::Swing::CallbackService {
     const double cpu_s = ThreadCpuSeconds() - cpu0;
     if (!result.ok()) return result.status();
     SwingResultToProto(*result, cpu_s, response);
-    if (job->strike && result->impact) LaunchBall(*job->strike, *result->impact, response->mutable_ball());
+    if (job->strike && result->impact) {
+      job->strike->flight.options.cancelled = job->run.cancelled;
+      LaunchBall(*job->strike, *result->impact, response->mutable_ball());
+    }
     return absl::OkStatus();
   }
 
   grpc::ServerUnaryReactor* SimulateFlight(grpc::CallbackServerContext* ctx,
                                            const v1::SimulateFlightRequest* request,
                                            v1::SimulateFlightResponse* response) override {
-    return Pooled(pool_, ctx, [request, response](const WorkControl&) {
-      return Fly(*request, response);
+    return Pooled(pool_, ctx, [request, response](const WorkControl& control) {
+      return Fly(*request, control, response);
     });
   }
 
-  static absl::Status Fly(const v1::SimulateFlightRequest& request,
+  // Like a swing, a flight polls its control (deadline, cancellation, CPU budget, shutdown).
+  static absl::Status Fly(const v1::SimulateFlightRequest& request, const WorkControl& control,
                           v1::SimulateFlightResponse* response) {
     absl::StatusOr<FlightJob> job = FlightJobFromProto(request);
     if (!job.ok()) return job.status();
+    job->options.cancelled = [&control] { return control.ShouldStop(); };
     const double cpu0 = ThreadCpuSeconds();
     absl::StatusOr<golf::FlightResult> result =
         golf::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);

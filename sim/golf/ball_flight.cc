@@ -351,6 +351,9 @@ class Flight {
       if (auto s = TakeStep(); !s.ok()) return s;
       const bool on_grid = StepOntoBreakpoint();
       ++result_->steps;
+      if (result_->steps % FlightOptions::kCancelPollSteps == 0) {
+        if (auto s = CheckBudget(); !s.ok()) return s;
+      }
       if (rk4_ && on_grid) ++grid_index_;
       LocateApex();
       const bool lands = y_new_[kZ] <= 0.0;
@@ -372,6 +375,24 @@ class Flight {
 
  private:
   CountedRhs Rhs() { return {&model_, &result_->rhs_evaluations}; }
+
+  // Every kCancelPollSteps steps: the caller's cancellation, and dp45's
+  // step budget (its step count is not known up front).
+  absl::Status CheckBudget() const {
+    if (o_.cancelled && o_.cancelled()) {
+      return absl::CancelledError(absl::StrFormat(
+          "flight cancelled at t = %.6f s after %d steps", t_, result_->steps));
+    }
+    const int64_t tried = result_->steps + result_->rejected_steps;
+    if (!rk4_ && tried >= FlightOptions::kMaxAdaptiveSteps) {
+      return absl::OutOfRangeError(absl::StrFormat(
+          "the flight took %d dp45 steps by t = %.6f s without landing "
+          "(aerodynamic rate %g 1/s: the ball's drag makes the equations "
+          "stiff, or the tolerance is too tight)",
+          tried, t_, rate_));
+    }
+    return absl::OkStatus();
+  }
 
   // One step of the scheme from the step start, without error control (h =
   // 0: no step): the partial steps that breakpoints and events re-take.

@@ -55,6 +55,7 @@
 #define SPORTSIM_SIM_GOLF_BALL_FLIGHT_H_
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -104,6 +105,16 @@ struct FlightOptions {
   SpinDecayModel spin_decay_model = SpinDecayModel::kLaunchSpeed;
   AeroCoefficients aero = {};       ///< C_D, C_L and decay fit
   uint32_t effects = 0;  ///< FlightEffect bits; 0 = full physics
+  /// Polled every kCancelPollSteps steps; returning true stops the flight
+  /// with kCancelled (a server's deadline, cancellation or CPU budget).
+  std::function<bool()> cancelled;
+
+  /// A dp45 flight's step count is not known up front: it grows with the
+  /// aerodynamic rate (a light, large ball is a stiff ODE, and an explicit
+  /// pair's step stays near 3.3 / rate). Accepted plus rejected steps stop
+  /// here with OutOfRange. Ordinary flights take tens to thousands.
+  static constexpr int64_t kMaxAdaptiveSteps = 1'000'000;
+  static constexpr int64_t kCancelPollSteps = 1024;
 
   static constexpr double kDefaultDt = 1e-3;       ///< RK4 step (s)
   static constexpr double kDefaultMaxStep = 0.05;  ///< DP45 largest step (s)
@@ -150,8 +161,10 @@ struct FlightResult {
 
 /// Flies the ball from launch to landing. Inputs are validated first
 /// (InvalidArgument names the first bad field). OutOfRange if the ball has
-/// not landed by max_flight_time_s, if an RK4 step would be unstable, or if
-/// the state becomes non-finite (the message gives the simulated time).
+/// not landed by max_flight_time_s, if an RK4 step would be unstable, if a
+/// dp45 flight needs more than kMaxAdaptiveSteps steps, or if the state
+/// becomes non-finite (the message gives the simulated time). kCancelled
+/// when options.cancelled says so.
 absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
                                             const LaunchConditions& launch,
                                             const Atmosphere& atmosphere,

@@ -468,6 +468,28 @@ TEST_F(BotsTest, ATinyCpuBudgetStopsALongShotAsTheBatchsError) {
   }
 }
 
+// A flight is held to the same budget: RK4 at the smallest step the request allows, over a
+// driver's ~6 s flight, is ~6e5 steps (~0.3 s of CPU in a release build, far more than 10 ms).
+TEST_F(BotsTest, ATinyCpuBudgetStopsALongFlight) {
+  config_.work.cpu_budget = absl::Milliseconds(10);
+  Start();
+  auto swing = v1::Swing::NewStub(channel_);
+  v1::SimulateFlightRequest req;
+  req.mutable_launch()->set_ball_speed_mps(75);
+  req.mutable_launch()->set_launch_angle_deg(11);
+  req.mutable_launch()->set_spin_rpm(2700);
+  req.set_dt_s(1e-5);
+  v1::SimulateFlightResponse resp;
+  const grpc::Status st = swing->SimulateFlight(Ctx().get(), req, &resp);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
+  EXPECT_THAT(st.error_message(), HasSubstr("--max_request_cpu"));
+  // The same flight in 600 steps of 10 ms fits the budget (and polls it never).
+  req.set_dt_s(1e-2);
+  const grpc::Status fine = swing->SimulateFlight(Ctx().get(), req, &resp);
+  EXPECT_TRUE(fine.ok()) << fine.error_message();
+  EXPECT_GT(resp.carry_m(), 200.0);
+}
+
 TEST_F(BotsTest, AClientThatCancelsMidStreamEndsTheWork) {
   Start();
   v1::SimulateShotsRequest req = Batch(RandomStrikes(1000, 9));

@@ -598,6 +598,43 @@ TEST(BallFlightOptions, GivesUpAfterMaxFlightTime) {
       << r.status().message();
 }
 
+TEST(BallFlightOptions, StiffAdaptiveFlightStopsAtItsStepBudget) {
+  // A 1e-9 kg ball of 0.5 m: K ~ 1e8 1/m, so it falls from 10 m at its
+  // terminal speed (~1 mm/s) with a drag rate ~ 3e4 1/s. Explicit dp45 is
+  // held near 3.3 / rate by stability: landing would take hours of flight
+  // and ~1e7 steps. The budget stops it with a reason, not a hang.
+  FlightOptions o{.integrator = ode::Integrator::kDp45,
+                  .accuracy = {.tolerance = 1e-6},
+                  .max_flight_time_s = 600,
+                  .launch_height_m = 10};
+  absl::StatusOr<FlightResult> r = SimulateFlight(
+      BallSpec{.mass_kg = 1e-9, .diameter_m = 0.5},
+      {.ball_speed_mps = 30, .launch_angle_deg = 20}, {}, {}, o);
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kOutOfRange);
+  EXPECT_TRUE(absl::StrContains(r.status().message(), "dp45 steps"))
+      << r.status().message();
+}
+
+TEST(BallFlightOptions, CancellationIsPolledAndStopsTheFlight) {
+  // RK4 at 1e-4 s: the driver's ~7 s flight is ~7e4 steps, ~68 polls.
+  int polls = 0;
+  FlightOptions o{.accuracy = {.dt_s = 1e-4}};
+  o.cancelled = [&polls] { return ++polls == 3; };
+  absl::StatusOr<FlightResult> r =
+      SimulateFlight(BallSpec{}, PgaTourDriver(), {}, {}, o);
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kCancelled);
+  EXPECT_EQ(polls, 3);
+  EXPECT_TRUE(absl::StrContains(r.status().message(), "after 3072 steps"))
+      << r.status().message();
+  // Never cancelled: it lands, having polled once every kCancelPollSteps.
+  polls = 0;
+  o.cancelled = [&polls] { ++polls; return false; };
+  absl::StatusOr<FlightResult> full =
+      SimulateFlight(BallSpec{}, PgaTourDriver(), {}, {}, o);
+  ASSERT_TRUE(full.ok()) << full.status();
+  EXPECT_EQ(polls, full->steps / FlightOptions::kCancelPollSteps);
+}
+
 // ---------------------------------------------------------------------------
 // Determinism and validation.
 
