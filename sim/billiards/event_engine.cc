@@ -446,12 +446,15 @@ class EventSimulation final : public TableSimulation {
     const Eigen::Vector2d dp = PosAt(j, t_) - P;
     const Eigen::Vector2d dv = VelAt(j, t_) - V;
     const Eigen::Vector2d da = tj.a - ti.a;
-    // Cull: the relative path's box must reach the disc of radius d around the origin.
-    const Box relative = PathBox(dp, dv, da, S);
-    if (!Near(relative, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), d_)) return p;
     const double dist = dp.norm();
     if (dist == 0.0) return p;
     const double gap = dist - d_;
+    // Cull a pair apart: the relative path's box must reach the disc of radius d around the
+    // origin. (A touching pair's box starts within kTouchGap of it: a cull would rarely hold.)
+    if (gap >= kTouchGap &&
+        !Near(PathBox(dp, dv, da, S), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), d_)) {
+      return p;
+    }
     if (gap < kTouchGap) {
       if (now_only != nullptr) *now_only = true;
       const Eigen::Vector2d n = dp / dist;
