@@ -167,9 +167,11 @@ Box PathBox(const Eigen::Vector2d& p, const Eigen::Vector2d& v, const Eigen::Vec
   return box;
 }
 // Do the boxes overlap (edges included)?
+// The box tests compare without a branch each (& on the comparisons, one branch at the use):
+// their outcomes are data-dependent, and a chain of && mispredicts often.
 bool Overlaps(const Box& a, const Box& b) {
-  return a.lo.x() <= b.hi.x() && a.hi.x() >= b.lo.x() && a.lo.y() <= b.hi.y() &&
-         a.hi.y() >= b.lo.y();
+  return (a.lo.x() <= b.hi.x()) & (a.hi.x() >= b.lo.x()) & (a.lo.y() <= b.hi.y()) &
+         (a.hi.y() >= b.lo.y());
 }
 // Is the box inside `region` (edges included)?
 bool Within(const Box& box, const Box& region) {
@@ -178,8 +180,8 @@ bool Within(const Box& box, const Box& region) {
 }
 // Does the box come within `reach` of the box [lo, hi]?
 bool Near(const Box& box, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, double reach) {
-  return box.lo.x() <= hi.x() + reach && box.hi.x() >= lo.x() - reach &&
-         box.lo.y() <= hi.y() + reach && box.hi.y() >= lo.y() - reach;
+  return (box.lo.x() <= hi.x() + reach) & (box.hi.x() >= lo.x() - reach) &
+         (box.lo.y() <= hi.y() + reach) & (box.hi.y() >= lo.y() - reach);
 }
 
 class EventSimulation final : public TableSimulation {
@@ -426,8 +428,8 @@ class EventSimulation final : public TableSimulation {
   // balls rest most of the time, and most pairs are far apart.
   bool MayMeet(bool i_translating, const Box& box, int j) const {
     const Reach& r = reach_[j];
-    return (i_translating || r.translating) && box.lo.x() <= r.hi_x && box.hi.x() >= r.lo_x &&
-           box.lo.y() <= r.hi_y && box.hi.y() >= r.lo_y;
+    return (i_translating | r.translating) & (box.lo.x() <= r.hi_x) & (box.hi.x() >= r.lo_x) &
+           (box.lo.y() <= r.hi_y) & (box.hi.y() >= r.lo_y);
   }
 
   // Ball i (at P, V now) against ball j, a pair that MayMeet, looking at most `horizon` ahead.
@@ -500,7 +502,7 @@ class EventSimulation final : public TableSimulation {
     PairMemo& m = memo_[PairIndex(a, b)];
     const uint32_t va = traj_[a].version, vb = traj_[b].version;
     const double end = t_ + std::min(horizon, Window(j) - t_);
-    if (m.va == va && m.vb == vb && m.t >= t_ && (m.t < kNever || m.until >= end)) {
+    if ((m.va == va) & (m.vb == vb) & (m.t >= t_) & ((m.t < kNever) | (m.until >= end))) {
       return Pending{.t = m.t, .kind = Kind::kBall, .a = a, .b = b, .va = va, .vb = vb};
     }
     bool now_only = false;
@@ -686,7 +688,7 @@ class EventSimulation final : public TableSimulation {
     // Predict(i) runs), so a later contact would be thrown away.
     const bool translating = IsTranslating(tr.state);
     for (int j = 0; j < n_; ++j) {
-      if (j == i || !MayMeet(translating, box, j)) continue;
+      if (!MayMeet(translating, box, j) | (j == i)) continue;
       const double horizon = std::min(Window(i), best.t) - t_;
       consider(PairEvent(i, P, V, j, horizon));
     }
@@ -758,9 +760,10 @@ class EventSimulation final : public TableSimulation {
     Predict(a);
     if (b >= 0) Predict(b);
     for (int j = 0; j < n_; ++j) {
-      if (j == a || j == b) continue;
       const Pending& p = best_[j];
-      if (p.found() && (p.Involves(a) || (b >= 0 && p.Involves(b)))) Predict(j);
+      // (Without a branch per test: see Overlaps.)
+      const bool involved = (p.a == a) | (p.b == a) | ((b >= 0) & ((p.a == b) | (p.b == b)));
+      if (involved & p.found() & (j != a) & (j != b)) Predict(j);
     }
   }
 
@@ -943,8 +946,12 @@ class EventSimulation final : public TableSimulation {
       expanded_[k] = 1;
       const Eigen::Vector2d rk = pos_[cluster_[k]];
       for (int j = 0; j < n_; ++j) {
-        if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
-        if (!linked(pos_[j] - rk)) continue;
+        // linked(), its squared test taken with the others without a branch (see Overlaps).
+        const double q2 = (pos_[j] - rk).squaredNorm();
+        if (!((traj_[j].state != MotionState::kPocketed) & (slot_of_[j] < 0) & (q2 < link2))) {
+          continue;
+        }
+        if (!(std::sqrt(q2) - d_ < gap_)) continue;
         const size_t s = static_cast<size_t>(Slot(j));
         for (size_t q = 0; with_links && q < s; ++q) {
           if (linked(pos_[j] - pos_[cluster_[q]])) links_.push_back({q, s});
@@ -1038,8 +1045,10 @@ class EventSimulation final : public TableSimulation {
         near_made_[k] = shifted;
         const double reach = (d_ + kNearSlack) * (d_ + kNearSlack);
         for (int j = 0; j < n_; ++j) {
-          if (j == i || traj_[j].state == MotionState::kPocketed) continue;
-          if ((pos_[j] - pos_[i]).squaredNorm() < reach) near_[k].push_back(j);
+          if ((j != i) & (traj_[j].state != MotionState::kPocketed) &
+              ((pos_[j] - pos_[i]).squaredNorm() < reach)) {
+            near_[k].push_back(j);
+          }
         }
       }
       for (const int j : near_[k]) {
@@ -1092,8 +1101,8 @@ class EventSimulation final : public TableSimulation {
       links_.clear();
       for (size_t k = 0; k < g; ++k) {
         for (size_t q = k + 1; q < g; ++q) {
-          if ((cluster_moved_[k] || cluster_moved_[q]) &&
-              (pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach) {
+          if ((cluster_moved_[k] | cluster_moved_[q]) &
+              ((pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach)) {
             links_.push_back({k, q});
           }
         }
