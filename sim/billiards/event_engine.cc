@@ -206,7 +206,6 @@ class EventSimulation final : public TableSimulation {
     resting_.resize(state_.balls.size());
     reach_.resize(state_.balls.size());
     candidates_.resize(state_.balls.size());
-    queue_at_.assign(state_.balls.size(), -1);
     memo_.resize(state_.balls.size() * state_.balls.size());
     last_plastic_.assign(memo_.size(), -kNever);
     jammed_at_.assign(memo_.size(), -kNever);
@@ -229,10 +228,10 @@ class EventSimulation final : public TableSimulation {
       return absl::InvalidArgumentError(absl::StrFormat(
           "t_end_s must be finite and not before the table's time %g s, got %g", t_, t_end));
     }
-    while (!queue_.empty() && best_[queue_.front()].t <= t_end) {
-      const Pending e = best_[queue_.front()];
+    for (int next = Next(); next >= 0 && best_[next].t <= t_end; next = Next()) {
+      const Pending e = best_[next];
       if (!Current(e)) {  // never expected (a ball's change re-predicts its partners)
-        Predict(queue_.front());
+        Predict(next);
         continue;
       }
       if (++processed_ > o_.max_events) {
@@ -640,14 +639,13 @@ class EventSimulation final : public TableSimulation {
     return Box{Eigen::Vector2d::Constant(kNever), Eigen::Vector2d::Constant(-kNever)};
   }
 
-  // Ball i's earliest event from now, in best_ and the event queue (Schedule).
+  // Ball i's earliest event from now, in best_ (the event queue: Next).
   void Predict(int i) {
     ++counts_.predictions;
     const Trajectory& tr = traj_[i];
     Pending best{.kind = Kind::kTransition, .a = i, .va = tr.version};
     if (tr.state == MotionState::kPocketed) {
       best_[i] = best;
-      Schedule(i);
       return;
     }
     if (IsMoving(tr.state)) {
@@ -702,61 +700,27 @@ class EventSimulation final : public TableSimulation {
       consider(PairEvent(i, P, V, candidates[c], horizon));
     }
     best_[i] = best;
-    Schedule(i);
   }
 
-  // The event queue: a binary heap of the balls with a predicted event, ordered by their
-  // best_ (earliest first, by Pending's total order), with each ball's place in it. A ball's
-  // entry moves when Predict replaces its best, so the queue never holds a stale event (every
-  // change of a ball re-predicts it and the balls whose best involved it): at most one entry
-  // a ball, and a pair's contact in both balls' entries until it is handled.
-  void Schedule(int i) {
-    int k = queue_at_[i];
-    if (!best_[i].found()) {
-      if (k < 0) return;
-      const int last = queue_.back();
-      queue_.pop_back();
-      queue_at_[i] = -1;
-      if (last == i) return;
-      queue_[k] = last;
-      queue_at_[last] = k;
-      SiftDown(SiftUp(k));
-      return;
+  // The event queue is best_ itself: each ball's earliest event, never stale (every change of
+  // a ball re-predicts it and the balls whose best involved it), a pair's contact in both
+  // balls' entries until it is handled. The next event is the earliest by Pending's total
+  // order. With a table's few balls a scan beats a heap: the scan for the earliest time keeps
+  // its running minimum without a branch, and only the entries at that very time (the two of
+  // a pair, or simultaneous events) are ordered by Before. Returns -1 when no ball has one.
+  int Next() const {
+    double earliest = kNever;
+    int next = -1;
+    for (int j = 0; j < n_; ++j) {
+      const double t = best_[j].t;
+      const bool earlier = t < earliest;
+      earliest = earlier ? t : earliest;
+      next = earlier ? j : next;
     }
-    if (k < 0) {
-      k = static_cast<int>(queue_.size());
-      queue_.push_back(i);
-      queue_at_[i] = k;
+    for (int j = next + 1; next >= 0 && j < n_; ++j) {
+      if (best_[j].t == earliest && best_[j].Before(best_[next])) next = j;
     }
-    SiftDown(SiftUp(k));
-  }
-  int SiftUp(int k) {
-    const int i = queue_[k];
-    while (k > 0) {
-      const int parent = (k - 1) / 2;
-      if (!best_[i].Before(best_[queue_[parent]])) break;
-      queue_[k] = queue_[parent];
-      queue_at_[queue_[k]] = k;
-      k = parent;
-    }
-    queue_[k] = i;
-    queue_at_[i] = k;
-    return k;
-  }
-  void SiftDown(int k) {
-    const int n = static_cast<int>(queue_.size());
-    const int i = queue_[k];
-    while (true) {
-      int child = 2 * k + 1;
-      if (child >= n) break;
-      if (child + 1 < n && best_[queue_[child + 1]].Before(best_[queue_[child]])) ++child;
-      if (!best_[queue_[child]].Before(best_[i])) break;
-      queue_[k] = queue_[child];
-      queue_at_[queue_[k]] = k;
-      k = child;
-    }
-    queue_[k] = i;
-    queue_at_[i] = k;
+    return next;
   }
 
   bool Current(const Pending& p) const {
@@ -1295,8 +1259,6 @@ class EventSimulation final : public TableSimulation {
   };
   std::vector<PairMemo> memo_;
   std::vector<double> last_plastic_;  // per pair (a * n + b, a < b): its last plastic contact
-  std::vector<int> queue_;     // the event queue (Schedule)
-  std::vector<int> queue_at_;  // each ball's place in queue_, -1: none
   double t_;
   bool dirty_ = true;
   int64_t processed_ = 0;
