@@ -352,15 +352,15 @@ class EventSimulation final : public TableSimulation {
     SetReach(i);
   }
 
+  // (A ball that does not translate has v0 = a = 0 (SetOrigin): the same formulas give r0 and
+  // zero, without a branch on its state.)
   Eigen::Vector2d PosAt(int i, double t) const {
     const Trajectory& tr = traj_[i];
-    if (!IsTranslating(tr.state)) return tr.r0;
     const double tau = t - tr.t0;
     return tr.r0 + tau * (tr.v0 + (0.5 * tau) * tr.a);
   }
   Eigen::Vector2d VelAt(int i, double t) const {
     const Trajectory& tr = traj_[i];
-    if (!IsTranslating(tr.state)) return Eigen::Vector2d::Zero();
     return tr.v0 + (t - tr.t0) * tr.a;
   }
 
