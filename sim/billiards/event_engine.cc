@@ -919,12 +919,8 @@ class EventSimulation final : public TableSimulation {
       expanded_[k] = 1;
       const Eigen::Vector2d rk = pos_[cluster_[k]];
       for (int j = 0; j < n_; ++j) {
-        // linked(), its squared test taken with the others without a branch (see Overlaps).
-        const double q2 = (pos_[j] - rk).squaredNorm();
-        if (!((traj_[j].state != MotionState::kPocketed) & (slot_of_[j] < 0) & (q2 < link2))) {
-          continue;
-        }
-        if (!(std::sqrt(q2) - d_ < gap_)) continue;
+        if (traj_[j].state == MotionState::kPocketed || slot_of_[j] >= 0) continue;
+        if (!linked(pos_[j] - rk)) continue;
         const size_t s = static_cast<size_t>(Slot(j));
         for (size_t q = 0; with_links && q < s; ++q) {
           if (linked(pos_[j] - pos_[cluster_[q]])) links_.push_back({q, s});
@@ -1018,10 +1014,8 @@ class EventSimulation final : public TableSimulation {
         near_made_[k] = shifted;
         const double reach = (d_ + kNearSlack) * (d_ + kNearSlack);
         for (int j = 0; j < n_; ++j) {
-          if ((j != i) & (traj_[j].state != MotionState::kPocketed) &
-              ((pos_[j] - pos_[i]).squaredNorm() < reach)) {
-            near_[k].push_back(j);
-          }
+          if (j == i || traj_[j].state == MotionState::kPocketed) continue;
+          if ((pos_[j] - pos_[i]).squaredNorm() < reach) near_[k].push_back(j);
         }
       }
       for (const int j : near_[k]) {
@@ -1074,8 +1068,8 @@ class EventSimulation final : public TableSimulation {
       links_.clear();
       for (size_t k = 0; k < g; ++k) {
         for (size_t q = k + 1; q < g; ++q) {
-          if ((cluster_moved_[k] | cluster_moved_[q]) &
-              ((pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach)) {
+          if ((cluster_moved_[k] || cluster_moved_[q]) &&
+              (pos_[cluster_[q]] - pos_[cluster_[k]]).squaredNorm() < reach) {
             links_.push_back({k, q});
           }
         }
