@@ -352,8 +352,8 @@ class EventSimulation final : public TableSimulation {
     SetReach(i);
   }
 
-  // (A ball that does not translate has v0 = a = 0 (SetOrigin): the same formulas give r0 and
-  // zero, without a branch on its state.)
+  // (A ball that does not translate has v0 = a = 0 (SetOrigin): the same formulas give r0 (a
+  // zero coordinate possibly +0 for -0) and zero, without a branch on its state.)
   Eigen::Vector2d PosAt(int i, double t) const {
     const Trajectory& tr = traj_[i];
     const double tau = t - tr.t0;
@@ -452,7 +452,9 @@ class EventSimulation final : public TableSimulation {
     if (dist == 0.0) return p;
     const double gap = dist - d_;
     // Cull a pair apart: the relative path's box must reach the disc of radius d around the
-    // origin. (A touching pair's box starts within kTouchGap of it: a cull would rarely hold.)
+    // origin. Not a touching pair: over a short horizon its box can stay clear of the contact
+    // square (a pair lined up with an axis) while it touches and closes now, and a culled pair
+    // would be memoised as "no contact", hiding the contact from the partner's prediction too.
     if (gap >= kTouchGap &&
         !Near(PathBox(dp, dv, da, S), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), d_)) {
       return p;
