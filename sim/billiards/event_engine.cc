@@ -731,11 +731,17 @@ class EventSimulation final : public TableSimulation {
   void Repredict(int a, int b = -1) {
     Predict(a);
     if (b >= 0) Predict(b);
+    PredictPartners([a, b](int x) { return x >= 0 && (x == a || x == b); });
+  }
+
+  // Predicts again every ball not `changed` whose earliest event involves a ball that is (its
+  // event was made from trajectories since replaced). changed(-1), no ball, must be false.
+  template <typename Changed>
+  void PredictPartners(const Changed& changed) {
     for (int j = 0; j < n_; ++j) {
       const Pending& p = best_[j];
-      // (Without a branch per test: see Overlaps.)
-      const bool involved = (p.a == a) | (p.b == a) | ((b >= 0) & ((p.a == b) | (p.b == b)));
-      if (involved & p.found() & (j != a) & (j != b)) Predict(j);
+      if (changed(j) || !p.found()) continue;
+      if (changed(p.a) || changed(p.b)) Predict(j);
     }
   }
 
@@ -1132,14 +1138,9 @@ class EventSimulation final : public TableSimulation {
     for (size_t k = 0; k < g; ++k) {
       if (cluster_moved_[k]) Predict(cluster_[k]);
     }
-    const auto moved = [&](int i) {
+    PredictPartners([this](int i) {
       return i >= 0 && slot_of_[i] >= 0 && cluster_moved_[slot_of_[i]];
-    };
-    for (int j = 0; j < n_; ++j) {
-      if (moved(j)) continue;
-      const Pending& p = best_[j];
-      if (p.found() && (moved(p.a) || moved(p.b))) Predict(j);
-    }
+    });
   }
 
   void HandleBalls(int ia, int ib, std::vector<Event>* events) {

@@ -47,9 +47,8 @@ double QuadraticRootIn(const double* c, double l, double h) {
 // p to show as p == 0).
 double Refine(const double* c, int degree, double a, double b, double fa, double fb,
               bool to_noise) {
-  const double l0 = a, h0 = b;
   // A line's root is one division (rounded once), kept in the bracket.
-  if (degree == 1) return std::clamp(-c[0] / c[1], l0, h0);
+  if (degree == 1) return std::clamp(-c[0] / c[1], a, b);
   // Keep lo on the side where p has the sign of p(a).
   double lo = a, hi = b;
   const bool neg_at_lo = fa < 0;
@@ -60,8 +59,8 @@ double Refine(const double* c, int degree, double a, double b, double fa, double
   // A quadratic's Newton iterations start from its closed-form root: at most a few units in
   // the last place off, so that one step confirms it.
   if (degree == 2) {
-    const double r = QuadraticRootIn(c, l0, h0);
-    if (r > l0 && r < h0) x = r;
+    const double r = QuadraticRootIn(c, a, b);
+    if (r > a && r < b) x = r;
   }
   for (int it = 0; it < 200; ++it) {
     double f, df;
@@ -148,16 +147,6 @@ struct BernsteinRatios {
 };
 constexpr BernsteinRatios kBernsteinRatios;
 
-}  // namespace
-
-// True when p > 0 everywhere on [0, hi], shown by its Bernstein coefficients there: p lies in
-// their convex hull (Farouki and Rajan, "On the numerical condition of polynomials in Bernstein
-// form", CAGD 4, 1987), so all of them positive proves it. Each must clear a margin far above
-// the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
-// call passes has no sign change the search below could have found either: it only saves the
-// search. Most predictions in a billiards shot are such pairs (near, but moving apart).
-namespace {
-
 // ProvablyPositive for a degree known at compile time (the loops unroll).
 template <int kDegree>
 bool ProvablyPositiveOf(const double* c, double hi) {
@@ -184,6 +173,12 @@ bool ProvablyPositiveOf(const double* c, double hi) {
 
 }  // namespace
 
+// True when p > 0 everywhere on [0, hi], shown by its Bernstein coefficients there: p lies in
+// their convex hull (Farouki and Rajan, "On the numerical condition of polynomials in Bernstein
+// form", CAGD 4, 1987), so all of them positive proves it. Each must clear a margin far above
+// the rounding of this conversion and of evaluating p (1e-12 of the largest), so that a p this
+// call passes has no sign change the search below could have found either: it only saves the
+// search. Most predictions in a billiards shot are such pairs (near, but moving apart).
 bool ProvablyPositive(const double* c, int degree, double hi) {
   // The first two Bernstein coefficients, p(0) and p(0) + p'(0) hi / n (here times n), decide
   // most failures (an approach) before the scaling; a margin never rescues one <= 0.
