@@ -342,12 +342,7 @@ class Flight {
   // Runs to the landing.
   absl::Status Run() {
     while (true) {
-      if (t_ >= o_.max_flight_time_s) {
-        return absl::OutOfRangeError(absl::StrFormat(
-            "the ball did not land within max_flight_time_s = %g s (height "
-            "%g m at t = %.6f s)",
-            o_.max_flight_time_s, y_[kZ], t_));
-      }
+      if (t_ >= o_.max_flight_time_s) return NotLandedError();
       if (auto s = TakeStep(); !s.ok()) return s;
       const bool on_grid = StepOntoBreakpoint();
       ++result_->steps;
@@ -361,6 +356,9 @@ class Flight {
         if (auto s = LocateLanding(); !s.ok()) return s;
       }
       const double t_end = lands ? t_ + h_land_ : t_ + h_;
+      // The step that crosses max_flight_time_s may still land inside it;
+      // a landing found past it is as much a miss as no landing at all.
+      if (lands && t_end > o_.max_flight_time_s) return NotLandedError();
       EmitSamples(t_end);
       if (lands) {
         Land(t_end);
@@ -375,6 +373,14 @@ class Flight {
 
  private:
   CountedRhs Rhs() { return {&model_, &result_->rhs_evaluations}; }
+
+  // The height is the last state inside the limit: the step start.
+  absl::Status NotLandedError() const {
+    return absl::OutOfRangeError(absl::StrFormat(
+        "the ball did not land within max_flight_time_s = %g s (height %g m "
+        "at t = %.6f s)",
+        o_.max_flight_time_s, y_[kZ], t_));
+  }
 
   // Every kCancelPollSteps steps: the caller's cancellation, and dp45's
   // step budget (its step count is not known up front).

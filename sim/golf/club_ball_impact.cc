@@ -128,6 +128,16 @@ absl::StatusOr<ImpactResult> SimulateImpact(const ClubDelivery& delivery,
   const double speed = v.norm();
   const double horizontal = std::hypot(v.x(), v.y());
   out.smash_factor = speed / delivery.clubhead_speed_mps;
+  // Valid but extreme inputs (a head or ball of a few 1e-324 kg) make the
+  // impulse underflow to zero or the spin overflow: no launch to describe.
+  if (!(speed > 0) || !std::isfinite(speed) ||
+      !out.ball_spin_radps.allFinite()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "the impact gives the ball no finite launch (speed %g m/s): "
+        "head_mass_kg = %g, mass_kg = %g and clubhead_speed_mps = %g are too "
+        "small to resolve in double precision",
+        speed, big_m, m, delivery.clubhead_speed_mps));
+  }
 
   // Spin split in the launch frame: right = d x z, up' = right x d.
   // Backspin is the component along `right`; a tilt toward -up' curves the

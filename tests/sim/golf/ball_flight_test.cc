@@ -598,6 +598,39 @@ TEST(BallFlightOptions, GivesUpAfterMaxFlightTime) {
       << r.status().message();
 }
 
+TEST(BallFlightOptions, ALandingPastMaxFlightTimeIsNotALanding) {
+  // The step that crosses the limit lands after it: before the fix the
+  // flight was returned with flight_time_s past max_flight_time_s.
+  for (ode::Integrator integrator :
+       {ode::Integrator::kRk4, ode::Integrator::kDp45}) {
+    SCOPED_TRACE(static_cast<int>(integrator));
+    FlightOptions o{.integrator = integrator,
+                    .accuracy = integrator == ode::Integrator::kRk4
+                                    ? ode::Accuracy{.dt_s = 0.05}
+                                    : ode::Accuracy{.tolerance = 1e-6}};
+    absl::StatusOr<FlightResult> free =
+        SimulateFlight(BallSpec{}, PgaTourSevenIron(), {}, {}, o);
+    ASSERT_TRUE(free.ok()) << free.status();
+    const double landing = free->flight_time_s;
+
+    o.max_flight_time_s = landing - 1e-6;  // inside the last step
+    absl::StatusOr<FlightResult> cut =
+        SimulateFlight(BallSpec{}, PgaTourSevenIron(), {}, {}, o);
+    ASSERT_EQ(cut.status().code(), absl::StatusCode::kOutOfRange)
+        << (cut.ok() ? absl::StrCat("landed at ", cut->flight_time_s)
+                     : cut.status().ToString());
+    EXPECT_TRUE(absl::StrContains(cut.status().message(), "max_flight_time_s"))
+        << cut.status().message();
+
+    o.max_flight_time_s = landing + 1e-6;
+    absl::StatusOr<FlightResult> in_time =
+        SimulateFlight(BallSpec{}, PgaTourSevenIron(), {}, {}, o);
+    ASSERT_TRUE(in_time.ok()) << in_time.status();
+    EXPECT_LE(in_time->flight_time_s, o.max_flight_time_s);
+    EXPECT_NEAR(in_time->flight_time_s, landing, 1e-6);
+  }
+}
+
 TEST(BallFlightOptions, StiffAdaptiveFlightStopsAtItsStepBudget) {
   // A 1e-9 kg ball of 0.5 m: K ~ 1e8 1/m, so it falls from 10 m at its
   // terminal speed (~1 mm/s) with a drag rate ~ 3e4 1/s. Explicit dp45 is

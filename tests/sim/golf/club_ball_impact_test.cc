@@ -280,6 +280,16 @@ TEST(ClubBallImpactValidation, RejectsBadInputsNamingTheField) {
       "friction_coefficient");
   ExpectInvalid(SimulateImpact(ok, club, {.inertia_factor = 0.7}).status(),
                 "inertia_factor");
+  // In range but too small for double precision: the impulse underflows to
+  // zero (a denormal head) or the spin overflows (a denormal ball).
+  club.head_mass_kg = std::numeric_limits<double>::denorm_min();
+  ExpectInvalid(SimulateImpact(ok, club, BallSpec{}).status(), "head_mass_kg");
+  club = Driver();
+  ExpectInvalid(
+      SimulateImpact(ok, club,
+                     {.mass_kg = std::numeric_limits<double>::denorm_min()})
+          .status(),
+      "mass_kg");
   ExpectInvalid(ClubPreset("4-wood").status(), "club_preset");
   ExpectInvalid(ClubPreset("").status(), "club_preset");
 }
