@@ -304,14 +304,19 @@ Model BuildModel(const BallSpec& ball, const LaunchConditions& launch,
   return model;
 }
 
-// The derivative as sim/core/ode wants it, counting evaluations.
+// The derivative as sim/core/ode wants it, counting evaluations and keeping
+// the largest aerodynamic rate of the states it was asked about (a step's
+// stages: RK4's stability check).
 struct CountedRhs {
   const Model* model;
   int64_t* evaluations;
+  double* largest_rate;
   State operator()(double /*t*/, const State& y) const {
     State dy;
-    Derivative(*model, y, &dy, nullptr);
+    double rate = 0.0;
+    Derivative(*model, y, &dy, &rate);
     ++*evaluations;
+    *largest_rate = std::max(*largest_rate, rate);
     return dy;
   }
 };
@@ -372,7 +377,9 @@ class Flight {
   }
 
  private:
-  CountedRhs Rhs() { return {&model_, &result_->rhs_evaluations}; }
+  CountedRhs Rhs() {
+    return {&model_, &result_->rhs_evaluations, &stage_rate_};
+  }
 
   // The height is the last state inside the limit: the step start.
   absl::Status NotLandedError() const {
@@ -421,9 +428,21 @@ class Flight {
             "use dp45",
             settings_.dt_s, t_, rate_, rate_ * h_, kRk4StabilityLimit));
       }
+      stage_rate_ = 0.0;
       y_new_ = ode::Rk4Step(Rhs(), t_, h_, y_, f_);
       Derivative(model_, y_new_, &f_new_, &rate_new_);
       ++result_->rhs_evaluations;
+      // The bound holds along the step, not only at its start: a ball that
+      // starts below kMinAirSpeedMps (no aerodynamic rate) can reach a stiff
+      // drag within its first step, and the stages then run away.
+      const double along = std::max(stage_rate_, rate_new_);
+      if (along * h_ > kRk4StabilityLimit) {
+        return absl::OutOfRangeError(absl::StrFormat(
+            "dt_s = %g s is too large for RK4 in the step from t = %.6f s: "
+            "aerodynamic rate %g 1/s x dt = %g exceeds the stability bound %g; "
+            "reduce dt_s or use dp45",
+            settings_.dt_s, t_, along, along * h_, kRk4StabilityLimit));
+      }
     } else {
       bool rejected = false;
       while (true) {
@@ -599,6 +618,7 @@ class Flight {
   double h_ = 0.0;
   State y_new_, f_new_;
   double rate_new_ = 0.0;
+  double stage_rate_ = 0.0;  // the largest rate CountedRhs saw (RK4 steps)
   double h_land_ = 0.0;
   State y_land_;
 };

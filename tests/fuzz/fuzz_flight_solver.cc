@@ -119,8 +119,22 @@ void Fly(FuzzedDataProvider& in, const g::LaunchConditions& launch) {
     t_prev = s.t_s;
   }
   if (!f.samples.empty()) {
-    FUZZ_CHECK(std::abs(f.samples.back().z_m) < 1e-6, "last sample at z = %g",
-               f.samples.back().z_m);
+    FUZZ_CHECK(std::abs(f.samples.back().z_m) < 1e-6,
+               "last sample at z = %g, t = %.17g (%zu samples; flight time %.17g s, %d steps; "
+               "integrator %d, dt %.17g, tolerance %.17g, max step %.17g, sample interval "
+               "%.17g s, launch height %.17g m, g %.17g, effects %u; ball %.17g kg, %.17g m; "
+               "launch %.17g m/s at %.17g deg, direction %.17g deg, spin %.17g rpm about "
+               "%.17g deg; fit %d, decay %d; air %.17g C %.17g Pa %.17g rh %.17g m; wind %.17g "
+               "m/s toward %.17g deg)",
+               f.samples.back().z_m, f.samples.back().t_s, f.samples.size(), f.flight_time_s,
+               static_cast<int>(f.steps), static_cast<int>(o.integrator),
+               o.accuracy.dt_s.value_or(NAN), o.accuracy.tolerance.value_or(NAN),
+               o.accuracy.max_step_s.value_or(NAN), o.sample_interval_s, o.launch_height_m,
+               o.gravity_mps2, o.effects, ball.mass_kg, ball.diameter_m, launch.ball_speed_mps,
+               launch.launch_angle_deg, launch.launch_direction_deg, launch.spin_rpm,
+               launch.spin_axis_deg, static_cast<int>(o.aero.fit),
+               static_cast<int>(o.spin_decay_model), air.temperature_c, air.pressure_pa,
+               air.relative_humidity, air.altitude_m, wind.speed_mps, wind.toward_deg);
   }
   const g::FlightResult& h = *r2;
   bool same = f.samples.size() == h.samples.size() && f.steps == h.steps &&

@@ -631,6 +631,28 @@ TEST(BallFlightOptions, ALandingPastMaxFlightTimeIsNotALanding) {
   }
 }
 
+TEST(BallFlightOptions, Rk4StabilityIsCheckedAlongTheStepNotOnlyAtItsStart) {
+  // Launched at 4e-9 m/s from 48.6 m, a 8.8e-11 kg ball of 0.42 m (K ~ 1e9
+  // 1/m) has an aerodynamic rate ~1 1/s at launch but meets one of ~1e7 1/s
+  // within its first 1 ms step (a fuzzer's find). Checked at the step start
+  // only, RK4's stages ran away and the "landing" sample lay 363 m below the
+  // ground.
+  const BallSpec ball{.mass_kg = 8.7766238721087575e-11, .diameter_m = 0.421875};
+  const LaunchConditions launch{.ball_speed_mps = 3.8097528180981821e-09,
+                                .launch_angle_deg = 28.353856703814337,
+                                .launch_direction_deg = -22.232208251953129};
+  FlightOptions o{.launch_height_m = 48.626978357468609,
+                  .gravity_mps2 = 15.101960784313725,
+                  .effects = kFlightDisableSpinDecay | kFlightDisableWind};
+  absl::StatusOr<FlightResult> r = SimulateFlight(ball, launch, {}, {}, o);
+  ASSERT_EQ(r.status().code(), absl::StatusCode::kOutOfRange)
+      << (r.ok() ? absl::StrCat("landed at t = ", r->flight_time_s, ", z = ",
+                                r->samples.back().z_m)
+                 : r.status().ToString());
+  EXPECT_TRUE(absl::StrContains(r.status().message(), "too large for RK4"))
+      << r.status().message();
+}
+
 TEST(BallFlightOptions, StiffAdaptiveFlightStopsAtItsStepBudget) {
   // A 1e-9 kg ball of 0.5 m: K ~ 1e8 1/m, so it falls from 10 m at its
   // terminal speed (~1 mm/s) with a drag rate ~ 3e4 1/s. Explicit dp45 is
