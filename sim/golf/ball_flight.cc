@@ -421,27 +421,20 @@ class Flight {
   absl::Status TakeStep() {
     if (rk4_) {
       h_ = static_cast<double>(grid_index_ + 1) * settings_.dt_s - t_;
-      if (rate_ * h_ > kRk4StabilityLimit) {
-        return absl::OutOfRangeError(absl::StrFormat(
-            "dt_s = %g s is too large for RK4 at t = %.6f s: aerodynamic rate "
-            "%g 1/s x dt = %g exceeds the stability bound %g; reduce dt_s or "
-            "use dp45",
-            settings_.dt_s, t_, rate_, rate_ * h_, kRk4StabilityLimit));
-      }
       stage_rate_ = 0.0;
       y_new_ = ode::Rk4Step(Rhs(), t_, h_, y_, f_);
       Derivative(model_, y_new_, &f_new_, &rate_new_);
       ++result_->rhs_evaluations;
-      // The bound holds along the step, not only at its start: a ball that
-      // starts below kMinAirSpeedMps (no aerodynamic rate) can reach a stiff
-      // drag within its first step, and the stages then run away.
-      const double along = std::max(stage_rate_, rate_new_);
-      if (along * h_ > kRk4StabilityLimit) {
+      // The bound must hold along the step, not only at its start: a ball too
+      // slow to feel the air (below kMinAirSpeedMps) can meet a stiff drag
+      // inside its first step, and the stages then run away.
+      const double rate = std::max({rate_, stage_rate_, rate_new_});
+      if (rate * h_ > kRk4StabilityLimit) {
         return absl::OutOfRangeError(absl::StrFormat(
             "dt_s = %g s is too large for RK4 in the step from t = %.6f s: "
             "aerodynamic rate %g 1/s x dt = %g exceeds the stability bound %g; "
             "reduce dt_s or use dp45",
-            settings_.dt_s, t_, along, along * h_, kRk4StabilityLimit));
+            settings_.dt_s, t_, rate, rate * h_, kRk4StabilityLimit));
       }
     } else {
       bool rejected = false;
