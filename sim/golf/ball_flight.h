@@ -114,7 +114,7 @@ struct FlightOptions {
   /// pair's step stays near 3.3 / rate). Accepted plus rejected steps stop
   /// here with OutOfRange. Ordinary flights take tens to thousands.
   static constexpr int64_t kMaxAdaptiveSteps = 1'000'000;
-  static constexpr int64_t kCancelPollSteps = 1024;
+  static constexpr int64_t kCancelPollSteps = ode::kPollSteps;
 
   static constexpr double kDefaultDt = 1e-3;       ///< RK4 step (s)
   static constexpr double kDefaultMaxStep = 0.05;  ///< DP45 largest step (s)

@@ -33,7 +33,7 @@ struct SwingRunOptions {
   /// Polled every kCancelPollSteps steps; returning true stops the run with kCancelled.
   std::function<bool()> cancelled;
 
-  static constexpr int kCancelPollSteps = 1024;
+  static constexpr int kCancelPollSteps = ode::kPollSteps;
   static constexpr int kMaxSamples = 200'000;  ///< fixed steps: refused up front; dp45: stops
   static constexpr int kMaxAdaptiveSteps = 2'000'000;  ///< dp45 runs stop with an error here
 };
