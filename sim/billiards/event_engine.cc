@@ -85,7 +85,6 @@ struct Pending {
   uint32_t va = 0, vb = 0;
 
   bool found() const { return t < kNever; }
-  bool Involves(int i) const { return a == i || b == i; }
   bool Before(const Pending& o) const {  // (t, kind, a, b, other) lexicographically
     if (t != o.t) return t < o.t;
     if (kind != o.kind) return kind < o.kind;
@@ -178,10 +177,10 @@ bool Within(const Box& box, const Box& region) {
   return box.lo.x() >= region.lo.x() && box.hi.x() <= region.hi.x() &&
          box.lo.y() >= region.lo.y() && box.hi.y() <= region.hi.y();
 }
-// Does the box come within `reach` of the box [lo, hi]?
-bool Near(const Box& box, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi, double reach) {
-  return (box.lo.x() <= hi.x() + reach) & (box.hi.x() >= lo.x() - reach) &
-         (box.lo.y() <= hi.y() + reach) & (box.hi.y() >= lo.y() - reach);
+// Does the box come within `reach` of the point p (per axis)?
+bool Near(const Box& box, const Eigen::Vector2d& p, double reach) {
+  return (box.lo.x() <= p.x() + reach) & (box.hi.x() >= p.x() - reach) &
+         (box.lo.y() <= p.y() + reach) & (box.hi.y() >= p.y() - reach);
 }
 
 class EventSimulation final : public TableSimulation {
@@ -556,7 +555,7 @@ class EventSimulation final : public TableSimulation {
     // The rounded ends. The earliest of all these is the first contact: the distance to the
     // segment is the distance to its line where the foot is on it, else to the nearer end.
     for (const Eigen::Vector2d& q : {seg.a, seg.b}) {
-      if (!Near(box, q, q, dc)) continue;
+      if (!Near(box, q, dc)) continue;
       const Eigen::Vector2d D = P - q;
       const double dq = D.norm();
       if (dq <= dc) continue;  // touching this end: handled above, or moving away from it
@@ -572,7 +571,7 @@ class EventSimulation final : public TableSimulation {
                         const Eigen::Vector2d& V, const Eigen::Vector2d& A) const {
     Pending p{.kind = Kind::kPocket, .a = i, .other = k, .va = traj_[i].version};
     const Pocket& pk = model_.spec().pockets[k];
-    if (!Near(box, pk.centre, pk.centre, pk.radius_m)) return p;
+    if (!Near(box, pk.centre, pk.radius_m)) return p;
     const Eigen::Vector2d D = P - pk.centre;
     const double dq = D.norm();
     if (dq <= pk.radius_m) {
@@ -626,7 +625,7 @@ class EventSimulation final : public TableSimulation {
         if (Overlaps(r, c)) return false;
       }
       for (const Pocket& pk : spec.pockets) {
-        if (Near(r, pk.centre, pk.centre, pk.radius_m)) return false;
+        if (Near(r, pk.centre, pk.radius_m)) return false;
       }
       return OnTable(r);
     };
