@@ -2,6 +2,7 @@
 #ifndef SPORTSIM_CLIENT_CLI_H_
 #define SPORTSIM_CLIENT_CLI_H_
 
+#include <cstdint>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -37,12 +38,48 @@ inline constexpr int kUsageExit = 64;
 const char* CodeName(int code);
 /// Prints "sportsim: CODE_NAME: message" to stderr; returns the exit status (the code number).
 int ReportRpcError(const grpc::Status& status);
-/// Prints "sportsim: usage: message" to stderr; returns kUsageExit.
+/// A value the CLI checks itself (a number out of its range, a rack without the ball to strike)
+/// is reported as the server would report it: marked by this prefix, UsageError prints
+/// "sportsim: INVALID_ARGUMENT: message" and returns that code's number. Flags it does not
+/// know and malformed arguments stay usage errors.
+inline constexpr std::string_view kInvalidValue = "INVALID_ARGUMENT: ";
+inline std::string InvalidValue(std::string_view message) {
+  return std::string(kInvalidValue) + std::string(message);
+}
+/// Prints "sportsim: usage: message" to stderr and returns kUsageExit, or, for a message made
+/// by InvalidValue, "sportsim: INVALID_ARGUMENT: message" and returns 3.
 int UsageError(std::string_view message);
 
 /// One JSON document (or one line, for jsonl) from a message, with proto field names and every
 /// field present. Protobuf's own JSON printer, not a hand-written one.
 std::string ToJson(const google::protobuf::Message& message, bool one_line);
+
+/// `--format json` on a stream (table watch, swing watch, swing drive): one JSON document, an
+/// array of the items, each written (and flushed) as it comes; the array is closed when the
+/// writer goes (the command ends, by its condition, the stream's end or an error), so the output
+/// of a command that ends is one valid document. Does nothing unless `on`.
+class JsonArrayStream {
+ public:
+  explicit JsonArrayStream(bool on) : on_(on) {}
+  JsonArrayStream(const JsonArrayStream&) = delete;
+  JsonArrayStream& operator=(const JsonArrayStream&) = delete;
+  ~JsonArrayStream() { Close(); }
+  /// One item, a JSON value on one line, complete as soon as it is written: "[" alone on the
+  /// first line, then the items one a line, every one but the first led by its comma.
+  void Add(const std::string& json) {
+    std::cout << (items_++ == 0 ? "[\n" : ",") << json << "\n" << std::flush;
+  }
+  void Close() {
+    if (!on_ || closed_) return;
+    closed_ = true;
+    std::cout << (items_ == 0 ? "[]\n" : "]\n") << std::flush;
+  }
+
+ private:
+  bool on_;
+  bool closed_ = false;
+  int64_t items_ = 0;
+};
 
 /// Shortest decimal text that reads back as the same double.
 std::string Num(double v);

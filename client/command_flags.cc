@@ -62,7 +62,7 @@ const Flags& SetupFlags() {
   static const Flags f = {
       {"table", "table preset: pool-7ft, pool-8ft, pool-9ft, snooker, carom, unbounded "
                 "(default pool-9ft; a ruled game: the game's)"},
-      {"rack", "rack: empty, 8ball, 9ball, snooker, three-cushion, chapter19 (default: the "
+      {"rack", "rack: empty, 8ball, 9ball, 10ball, snooker, three-cushion, chapter19 (default: the "
                "preset's game)"},
       {"ball", "put a ball at rest at (X, Y) m; an id already racked moves there, a new one is "
                "added (repeatable, each id once)"},
@@ -217,6 +217,8 @@ std::vector<CommandSpec> MakeSpecs() {
               {"shot_clock", "ruled games: seconds of table time per shot, [0, 3600] (default 0: "
                              "off)"},
               {"start", "ruled games: break (default) or in-play"},
+              {"aim_lines", "on (default) or off: may the seat to play ask for aim lines "
+                            "(PreviewShot)"},
               {"rule", "ruled games: a variant (repeatable; `sportsim info` lists them)"},
               {"noise", "ruled games: noise on every strike, [0, 100] (default 0)"},
               {"seed", "ruled games: the noise's seed (default random, secret until the match "

@@ -426,12 +426,12 @@ bool FieldChar(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
 }
 
-// "strike.ball: no ball "x" (place it with table.balls)" ->
-// "strike.ball (--strike-ball): no ball "x" (place it with table.balls (--ball))". Each field
-// is named once (its first mention), whole words only.
+// The flags behind the request fields a server message names, appended after the message,
+// which is left verbatim: "strike.ball: no ball "x" (place it with table.balls)" gets
+// " [flags: --strike-ball, --ball]". Each flag is named once, in the order of the fields'
+// first mentions; whole field names only.
 std::string WithFlagNames(const std::string& message) {
-  std::vector<std::pair<size_t, std::string>> inserts;  // after position, text
-  std::set<std::string_view> done;
+  std::vector<std::string_view> flags;
   for (size_t i = 0; i < message.size(); ++i) {
     if (i > 0 && (FieldChar(message[i - 1]) || message[i - 1] == '.')) continue;
     const FieldFlag* best = nullptr;
@@ -441,23 +441,19 @@ std::string WithFlagNames(const std::string& message) {
       if (end < message.size() && (FieldChar(message[end]) || message[end] == '.')) continue;
       if (best == nullptr || f.field.size() > best->field.size()) best = &f;
     }
-    if (best == nullptr || !done.insert(best->field).second) continue;
-    size_t end = i + best->field.size();
-    // table.balls[1].id: after the index and sub-field.
-    while (end < message.size() && (message[end] == '[' || message[end] == '.')) {
-      const char open = message[end];
-      ++end;
-      while (end < message.size() && (open == '[' ? message[end] != ']' : FieldChar(message[end]))) {
-        ++end;
-      }
-      if (open == '[' && end < message.size()) ++end;
+    if (best == nullptr) continue;
+    if (std::find(flags.begin(), flags.end(), best->flag) == flags.end()) {
+      flags.push_back(best->flag);
     }
-    inserts.emplace_back(end, std::string(" (") + std::string(best->flag) + ")");
-    i = end - 1;
+    i += best->field.size() - 1;
   }
-  std::string out = message;
-  for (auto it = inserts.rbegin(); it != inserts.rend(); ++it) out.insert(it->first, it->second);
-  return out;
+  if (flags.empty()) return message;
+  std::string out = message + (flags.size() == 1 ? " [flag: " : " [flags: ");
+  for (size_t k = 0; k < flags.size(); ++k) {
+    if (k > 0) out += ", ";
+    out += flags[k];
+  }
+  return out + "]";
 }
 
 }  // namespace
@@ -470,6 +466,10 @@ int ReportRpcError(const grpc::Status& status) {
 }
 
 int UsageError(std::string_view message) {
+  if (message.substr(0, kInvalidValue.size()) == kInvalidValue) {
+    std::cerr << "sportsim: INVALID_ARGUMENT: " << message.substr(kInvalidValue.size()) << "\n";
+    return static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT);
+  }
   std::cerr << "sportsim: usage: " << message << "\n";
   return kUsageExit;
 }

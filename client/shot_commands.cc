@@ -59,7 +59,7 @@ std::optional<std::string> BuildSetup(v1::TableSetup* t) {
     return "--table: needs a preset: pool-7ft, pool-8ft, pool-9ft, snooker, carom or unbounded";
   }
   if (FlagGiven("rack") && absl::GetFlag(FLAGS_rack).empty()) {
-    return "--rack: needs a rack: empty, 8ball, 9ball, snooker, three-cushion or chapter19";
+    return "--rack: needs a rack: empty, 8ball, 9ball, 10ball, snooker, three-cushion or chapter19";
   }
   t->set_preset(absl::GetFlag(FLAGS_table));
   t->set_rack(absl::GetFlag(FLAGS_rack));
@@ -108,12 +108,16 @@ std::optional<std::string> BuildSolver(v1::SolverConfig* s) {
   // server because drag is on (the event engine has no closed form with drag).
   const std::vector<std::string> enabled = absl::GetFlag(FLAGS_enable);
   const bool drag = std::find(enabled.begin(), enabled.end(), "drag") != enabled.end();
-  const bool stepped = engine == "stepped" || (engine.empty() && drag);
+  // Without --engine, a step setting asks for the stepped engine: it is the only one they
+  // mean something to. With --engine event they contradict it.
+  bool step_settings = false;
+  for (const char* flag : {"integrator", "dt", "no_ccd"}) step_settings |= FlagGiven(flag);
+  if (engine.empty() && step_settings) s->set_engine(v1::ENGINE_STEPPED);
+  const bool stepped = engine == "stepped" || (engine.empty() && (drag || step_settings));
   for (const char* flag : {"integrator", "dt", "no_ccd"}) {
     if (FlagGiven(flag) && !stepped) {
-      return Dashed(flag) + ": applies to the stepped engine only (" +
-             (engine.empty() ? "the default engine is event" : "--engine " + engine) +
-             "; add --engine stepped)";
+      return Dashed(flag) + ": applies to the stepped engine only (--engine " + engine +
+             "; leave --engine out or give --engine stepped)";
     }
   }
   const std::string integ = absl::GetFlag(FLAGS_integrator);
@@ -212,8 +216,8 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
     bool placed = false;
     for (const v1::BallPlacement& b : request.table().balls()) placed |= b.id() == struck;
     if (!placed) {
-      return UsageError("--rack empty: no " + struck + " ball to strike: place it with --ball " +
-                        struck + "@X,Y");
+      return UsageError(InvalidValue("--rack empty: no " + struck +
+                                      " ball to strike: place it with --ball " + struck + "@X,Y"));
     }
   }
   const std::string svg = absl::GetFlag(FLAGS_svg);
@@ -222,7 +226,7 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   if (auto rate = absl::GetFlag(FLAGS_sample_rate)) request.set_sample_rate_hz(*rate);
   else if (want_samples) request.set_sample_rate_hz(240);
   if (auto t = absl::GetFlag(FLAGS_max_time)) {
-    if (!(*t > 0 && *t <= 3600)) return UsageError("--max-time: must be in (0, 3600] s, got " + Num(*t));
+    if (!(*t > 0 && *t <= 3600)) return UsageError(InvalidValue("--max-time: must be in (0, 3600] s, got " + Num(*t)));
     request.set_max_time_s(*t);
   }
   request.set_include_geometry(!svg.empty());
@@ -252,7 +256,8 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
 // mapping of CueStrike: ball, speed_mps | ball_speed_mps, phi_deg, theta_deg, a, b; the
 // lowerCamel spellings too); blank lines and lines starting with '#' skipped. A line that does
 // not parse is a usage error naming it.
-std::optional<std::string> ReadStrikes(std::istream& in, v1::SimulateShotsRequest* request) {
+constexpr int kMaxStdinStrikes = 1'000'000;
+std::optional<std::string> ReadStrikes(std::istream& in, std::vector<v1::CueStrike>* strikes) {
   std::string line;
   int line_number = 0;
   google::protobuf::util::JsonParseOptions options;
@@ -261,8 +266,8 @@ std::optional<std::string> ReadStrikes(std::istream& in, v1::SimulateShotsReques
     ++line_number;
     const absl::string_view text = absl::StripAsciiWhitespace(line);
     if (text.empty() || text[0] == '#') continue;
-    if (request->strikes_size() >= 10000) {
-      return absl::StrFormat("stdin: at most 10000 strikes in one batch (line %d is one more)",
+    if (strikes->size() >= kMaxStdinStrikes) {
+      return absl::StrFormat("stdin: at most %d strikes (line %d is one more)", kMaxStdinStrikes,
                              line_number);
     }
     v1::CueStrike strike;
@@ -284,13 +289,21 @@ std::optional<std::string> ReadStrikes(std::istream& in, v1::SimulateShotsReques
           "stdin line %d: noise and seed are the batch's (--noise, --seed), not a strike's",
           line_number);
     }
-    *request->add_strikes() = std::move(strike);
+    strikes->push_back(std::move(strike));
   }
-  if (request->strikes_size() == 0) {
+  if (strikes->empty()) {
     return "shot batch reads its strikes from stdin, one JSON object a line (none given)";
   }
   return std::nullopt;
 }
+
+// One request carries at most this many bytes of strikes (the server's --max_request_bytes is
+// 64 KiB by default, and the table's setup rides along), this many strikes, and this many
+// outcomes (the server's per-request limits): a longer batch goes as consecutive requests
+// numbered by first_index, which give the outcomes, indices and noise seeds one request would.
+constexpr size_t kChunkStrikeBytes = 32 * 1024;
+constexpr int kChunkStrikes = 10000;
+constexpr int64_t kChunkOutcomes = 100000;
 
 int RunBatch(const Context& ctx, const std::vector<std::string>& args) {
   if (!args.empty()) return UsageError("shot batch takes flags only (strikes on stdin), got '" + args[0] + "'");
@@ -299,11 +312,11 @@ int RunBatch(const Context& ctx, const std::vector<std::string>& args) {
   if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
   const int samples = absl::GetFlag(FLAGS_samples);
   if (samples < 1 || samples > 1000) {
-    return UsageError(absl::StrFormat("--samples: must be in [1, 1000], got %d", samples));
+    return UsageError(InvalidValue(absl::StrFormat("--samples: must be in [1, 1000], got %d", samples)));
   }
   request.set_samples_per_strike(static_cast<uint32_t>(samples));
   const double noise = absl::GetFlag(FLAGS_noise);
-  if (!(noise >= 0 && noise <= 100)) return UsageError("--noise: must be in [0, 100], got " + Num(noise));
+  if (!(noise >= 0 && noise <= 100)) return UsageError(InvalidValue("--noise: must be in [0, 100], got " + Num(noise)));
   request.set_noise(noise);
   request.set_seed(absl::GetFlag(FLAGS_seed));
   const std::string outcome = absl::GetFlag(FLAGS_outcome);
@@ -312,36 +325,45 @@ int RunBatch(const Context& ctx, const std::vector<std::string>& args) {
   else if (outcome == "events") request.set_outcome(v1::SHOT_OUTCOME_EVENTS);
   else return UsageError("--outcome must be summary, final or events, got '" + outcome + "'");
   if (auto t = absl::GetFlag(FLAGS_max_time)) {
-    if (!(*t > 0 && *t <= 3600)) return UsageError("--max-time: must be in (0, 3600] s, got " + Num(*t));
+    if (!(*t > 0 && *t <= 3600)) return UsageError(InvalidValue("--max-time: must be in (0, 3600] s, got " + Num(*t)));
     request.set_max_time_s(*t);
   }
-  if (auto bad = ReadStrikes(std::cin, &request)) return UsageError(*bad);
-  if (static_cast<int64_t>(request.strikes_size()) * samples > 100000) {
-    return UsageError(absl::StrFormat(
-        "%d strikes x --samples %d is above the 100000 outcomes of one batch",
-        request.strikes_size(), samples));
-  }
+  std::vector<v1::CueStrike> strikes;
+  if (auto bad = ReadStrikes(std::cin, &strikes)) return UsageError(*bad);
 
   auto stub = v1::Billiards::NewStub(ctx.channel);
-  std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
-  std::unique_ptr<grpc::ClientReader<v1::SimulateShotsResponse>> reader =
-      stub->SimulateShots(call.get(), request);
   // jsonl (and the default): one outcome a line as they come; json: one document at the end.
   const bool document = ctx.format == Format::kJson;
   v1::SimulateShotsResponse all;
   v1::SimulateShotsResponse response;
-  while (reader->Read(&response)) {
-    for (v1::ShotOutcome& o : *response.mutable_outcomes()) {
-      if (document) {
-        *all.add_outcomes() = std::move(o);
-      } else {
-        std::cout << ToJson(o, true) << "\n";
-      }
+  const int64_t per_chunk = std::min<int64_t>(kChunkStrikes, kChunkOutcomes / samples);
+  for (size_t first = 0; first < strikes.size();) {
+    request.clear_strikes();
+    request.set_first_index(static_cast<uint32_t>(first));
+    size_t bytes = 0;
+    size_t next = first;
+    while (next < strikes.size() && request.strikes_size() < per_chunk &&
+           (request.strikes_size() == 0 || bytes + strikes[next].ByteSizeLong() + 4 <= kChunkStrikeBytes)) {
+      bytes += strikes[next].ByteSizeLong() + 4;  // + the field's tag and length
+      *request.add_strikes() = strikes[next++];
     }
-    if (!document) std::cout.flush();
+    std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
+    std::unique_ptr<grpc::ClientReader<v1::SimulateShotsResponse>> reader =
+        stub->SimulateShots(call.get(), request);
+    while (reader->Read(&response)) {
+      for (v1::ShotOutcome& o : *response.mutable_outcomes()) {
+        if (document) {
+          *all.add_outcomes() = std::move(o);
+        } else {
+          std::cout << ToJson(o, true) << "\n";
+        }
+      }
+      if (!document) std::cout.flush();
+    }
+    const grpc::Status status = reader->Finish();
+    if (!status.ok()) return ReportRpcError(status);
+    first = next;
   }
-  const grpc::Status status = reader->Finish();
-  if (!status.ok()) return ReportRpcError(status);
   if (document) std::cout << ToJson(all, false) << "\n";
   return 0;
 }

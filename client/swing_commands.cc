@@ -103,7 +103,7 @@ std::optional<std::string> BuildTorqueProgram(v1::TorqueProgram* torques) {
   const auto qa = absl::GetFlag(FLAGS_qalpha);
   const auto qb = absl::GetFlag(FLAGS_qbeta);
   const auto qb_until = absl::GetFlag(FLAGS_qbeta_until);
-  if (qb_until && !(*qb_until > 0)) return "--qbeta-until must be a time after 0 s";
+  if (qb_until && !(*qb_until > 0)) return InvalidValue("--qbeta-until must be a time after 0 s");
   if (!qa && !qb && !qb_until) return std::nullopt;
   v1::TorqueKnot* k = torques->mutable_qalpha()->add_knots();
   k->set_t_s(0);
@@ -182,7 +182,7 @@ std::optional<std::string> BuildRequest(v1::SimulateSwingRequest* r) {
   if (auto bad = BuildSwingEffects(&disabled)) return bad;
   for (v1::SwingEffect e : disabled) r->add_disabled_effects(e);
   const int stride = absl::GetFlag(FLAGS_stride);
-  if (stride < 0) return "--stride must be >= 0";
+  if (stride < 0) return InvalidValue("--stride must be >= 0");
   r->set_sample_stride(static_cast<uint32_t>(stride));
   if (auto bad = BuildBallStrike(r->mutable_ball())) return bad;
   if (r->ball().club().empty()) r->clear_ball();

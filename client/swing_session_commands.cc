@@ -295,13 +295,15 @@ std::string EventNote(const v1::SwingEvent& e) {
 // Heartbeats print nothing.
 class StreamPrinter {
  public:
-  explicit StreamPrinter(Format format) : format_(format) {}
+  explicit StreamPrinter(Format format) : format_(format), document_(format == Format::kJson) {}
 
   void Add(const v1::SwingSnapshot& s) {
     if (s.heartbeat()) return;
     const v1::SwingImpact* impact = ImpactOf(s);
     switch (format_) {
       case Format::kJson:
+        if (s.has_state() || impact != nullptr) document_.Add(JsonLine(s, impact));
+        break;
       case Format::kJsonl:
         if (s.has_state() || impact != nullptr) std::cout << JsonLine(s, impact) << std::endl;
         break;
@@ -337,6 +339,7 @@ class StreamPrinter {
   }
 
   Format format_;
+  JsonArrayStream document_;  // --format json: the snapshots as one array
   bool header_done_ = false;
 };
 

@@ -54,6 +54,9 @@ ABSL_FLAG(std::optional<int>, race_to, std::nullopt, "table create: frames to wi
 ABSL_FLAG(std::optional<double>, shot_clock, std::nullopt,
           "table create: seconds of table time per shot (0 = off, the default)");
 ABSL_FLAG(std::string, start, "", "table create: break (default) or in-play");
+ABSL_FLAG(std::string, aim_lines, "",
+          "table create: on (default) or off: whether the seat to play may ask for aim lines "
+          "(PreviewShot)");
 ABSL_FLAG(std::string, call, "", "table shoot: the called ball and pocket, BALL:POCKET");
 ABSL_FLAG(bool, safety, false, "table shoot: declare a safety");
 ABSL_FLAG(bool, push_out, false, "table shoot: declare a push-out (9-ball, 10-ball)");
@@ -108,11 +111,11 @@ std::optional<std::string> BuildGame(v1::CreateTableRequest* request) {
   v1::GameConfig* g = request->mutable_game();
   g->set_name(absl::GetFlag(FLAGS_game));
   if (const auto race = absl::GetFlag(FLAGS_race_to)) {
-    if (*race < 1) return "--race-to must be a number of frames, at least 1";
+    if (*race < 1) return InvalidValue("--race-to must be a number of frames, at least 1");
     g->set_race_to(static_cast<uint32_t>(*race));
   }
   if (const auto clock = absl::GetFlag(FLAGS_shot_clock)) {
-    if (!(*clock >= 0)) return "--shot-clock must be seconds, 0 (off) or more";
+    if (!(*clock >= 0)) return InvalidValue("--shot-clock must be seconds, 0 (off) or more");
     g->set_shot_clock_s(*clock);
   }
   const std::string start = absl::GetFlag(FLAGS_start);
@@ -144,6 +147,11 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   for (const std::string& n : absl::GetFlag(FLAGS_seat_names)) request.add_seat_names(n);
   request.set_tick_hz(absl::GetFlag(FLAGS_tick_hz));
   if (auto bad = BuildGame(&request)) return UsageError(*bad);
+  if (Given("aim_lines")) {
+    const std::string aim = absl::GetFlag(FLAGS_aim_lines);
+    if (aim != "on" && aim != "off") return UsageError("--aim-lines must be on or off, got '" + aim + "'");
+    request.set_aim_lines(aim == "on");
+  }
   // A ruled game is played on its own table unless --table names one.
   if (request.has_game() && !Given("table")) request.mutable_table()->clear_preset();
   v1::CreateTableResponse r;
@@ -312,7 +320,7 @@ int RunShoot(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   if (!Given("strike_ball")) request.mutable_strike()->clear_ball();
   if (auto bad = BuildCall(&request)) return UsageError(*bad);
   if (const auto next = absl::GetFlag(FLAGS_next_seat)) {
-    if (*next < 0) return UsageError("--next-seat must be a seat number");
+    if (*next < 0) return UsageError(InvalidValue("--next-seat must be a seat number"));
     request.set_next_seat(static_cast<uint32_t>(*next));
   }
   v1::ShootResponse r;
@@ -360,7 +368,7 @@ int RunConcede(const Context& ctx, Stub& stub, const std::vector<std::string>& a
     return UsageError("table concede needs --token (a seat's, or the admin token with --seat)");
   }
   if (const auto seat = absl::GetFlag(FLAGS_seat)) {
-    if (*seat < 0) return UsageError("--seat must be a seat number");
+    if (*seat < 0) return UsageError(InvalidValue("--seat must be a seat number"));
     request.set_seat(static_cast<uint32_t>(*seat));
   }
   v1::ConcedeResponse r;
@@ -536,6 +544,7 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
   std::unique_ptr<grpc::ClientReader<v1::TableSnapshot>> reader =
       stub.WatchTable(&call, request);
   v1::TableSnapshot s;
+  JsonArrayStream document(ctx.format == Format::kJson);
   WatchText text;
   bool saw_shot_end = false;
   bool saw_moving = false;
@@ -547,7 +556,7 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
     // A reader resynced after falling behind may have lost the shot_end event itself.
     saw_moving |= !s.at_rest() || s.resync();
     switch (ctx.format) {
-      case Format::kJson:
+      case Format::kJson: document.Add(ToJson(s, true)); break;
       case Format::kJsonl: std::cout << ToJson(s, true) << std::endl; break;
       case Format::kCsv:
         if (snapshots == 1) std::cout << "sequence,tick,t_s,id,x_m,y_m,state\n";
@@ -597,11 +606,11 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
 std::optional<std::string> CheckSeatFlags() {
   const int seats = absl::GetFlag(FLAGS_seats);
   if (Given("seats") && (seats < 1 || seats > 16)) {
-    return absl::StrCat("--seats: must be in [1, 16], got ", seats);
+    return InvalidValue(absl::StrCat("--seats: must be in [1, 16], got ", seats));
   }
   const double tick_hz = absl::GetFlag(FLAGS_tick_hz);
   if (Given("tick_hz") && !(tick_hz >= 1 && tick_hz <= 1000)) {
-    return "--tick-hz: must be in [1, 1000], got " + Num(tick_hz);
+    return InvalidValue("--tick-hz: must be in [1, 1000], got " + Num(tick_hz));
   }
   const std::vector<std::string> names = absl::GetFlag(FLAGS_seat_names);
   for (size_t i = 0; i < names.size(); ++i) {
@@ -615,7 +624,8 @@ std::optional<std::string> CheckSeatFlags() {
 std::optional<std::string> CheckPageSize() {
   const int n = absl::GetFlag(FLAGS_page_size);
   if (n < 0 || n > 1000) {
-    return absl::StrCat("--page-size: must be in [0, 1000] (0: the default, 100), got ", n);
+    return InvalidValue(
+        absl::StrCat("--page-size: must be in [0, 1000] (0: the default, 100), got ", n));
   }
   return std::nullopt;
 }
@@ -631,7 +641,7 @@ std::optional<std::string> CheckGameFlags(std::string_view command, std::string_
       {"shot_clock", "--shot-clock", "create"}, {"start", "--start", "create"},
       {"call", "--call", "shoot"},           {"safety", "--safety", "shoot"},
       {"push_out", "--push-out", "shoot"},   {"nominate", "--nominate", "shoot"},
-      {"choice", "--choice", "decide"},
+      {"choice", "--choice", "decide"},      {"aim_lines", "--aim-lines", "create"},
   };
   const bool table = command == "table";
   for (const Use& u : kUses) {

@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <algorithm>
@@ -12,14 +13,36 @@
 #include "absl/flags/flag.h"
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/time/time.h"
 #include "server/app/server_app.h"
 
+namespace {
+
+// A duration flag: seconds as a bare number (`--lease 10`, `--max_request_cpu 2.5`) or with a
+// unit (`10s`, `500ms`, `1m`, absl's duration syntax).
+struct Seconds {
+  absl::Duration d;
+};
+bool AbslParseFlag(absl::string_view text, Seconds* out, std::string* error) {
+  if (absl::ParseDuration(text, &out->d)) return true;
+  double s = 0;
+  if (absl::SimpleAtod(text, &s) && std::isfinite(s)) {
+    out->d = absl::Seconds(s);
+    return true;
+  }
+  *error = "must be seconds (10, 2.5) or a duration with its unit (10s, 500ms, 1m)";
+  return false;
+}
+std::string AbslUnparseFlag(Seconds s) { return absl::FormatDuration(s.d); }
+
+}  // namespace
+
 ABSL_FLAG(std::string, listen, "127.0.0.1:50051",
           "Address to serve on, host:port or [ipv6]:port; port 0 picks a free port");
 ABSL_FLAG(int, port, -1, "If set, overrides the port of --listen");
-ABSL_FLAG(absl::Duration, shutdown_grace, absl::Seconds(3),
+ABSL_FLAG(Seconds, shutdown_grace, Seconds{absl::Seconds(3)},
           "On SIGINT/SIGTERM, how long in-flight calls may take to finish before cancellation "
           "(watch streams end at once, with a last snapshot)");
 ABSL_FLAG(int, max_request_bytes, 64 << 10, "Largest request message accepted (bytes)");
@@ -28,12 +51,12 @@ ABSL_FLAG(int, max_watchers_per_table, 64, "Most WatchTable streams per table");
 ABSL_FLAG(std::string, metrics_listen, "",
           "HOST:PORT of a Prometheus /metrics endpoint (e.g. 127.0.0.1:9464; port 0: any free "
           "port, printed at start); off when empty");
-ABSL_FLAG(absl::Duration, keepalive_time, absl::Seconds(30),
+ABSL_FLAG(Seconds, keepalive_time, Seconds{absl::Seconds(30)},
           "Ping a connection silent for this long; with --keepalive_timeout, how soon a vanished "
           "client's streams end");
-ABSL_FLAG(absl::Duration, keepalive_timeout, absl::Seconds(10),
+ABSL_FLAG(Seconds, keepalive_timeout, Seconds{absl::Seconds(10)},
           "Drop a connection whose keepalive ping is not answered in this long");
-ABSL_FLAG(absl::Duration, min_client_ping_interval, absl::Seconds(10),
+ABSL_FLAG(Seconds, min_client_ping_interval, Seconds{absl::Seconds(10)},
           "Clients may send keepalive pings this often (with or without calls); faster pings "
           "get a GOAWAY");
 ABSL_FLAG(int, max_sessions, 2000, "Most swing sessions the server holds at once");
@@ -59,7 +82,7 @@ ABSL_FLAG(int, sim_workers, 0,
           "per core");
 ABSL_FLAG(int, max_queued_simulations, 64,
           "Simulations that may wait for a worker; more are refused with RESOURCE_EXHAUSTED");
-ABSL_FLAG(absl::Duration, max_request_cpu, absl::Seconds(10),
+ABSL_FLAG(Seconds, max_request_cpu, Seconds{absl::Seconds(10)},
           "CPU time one simulation request may use before it is stopped with "
           "RESOURCE_EXHAUSTED, in [10ms, 1h]");
 ABSL_FLAG(double, clock_rate, 1.0,
@@ -76,7 +99,7 @@ ABSL_FLAG(std::string, store, "",
 ABSL_FLAG(std::string, node, "",
           "This server's name in the PostgreSQL store (its lease and its worlds); default: the "
           "host name");
-ABSL_FLAG(absl::Duration, lease, absl::Seconds(10),
+ABSL_FLAG(Seconds, lease, Seconds{absl::Seconds(10)},
           "PostgreSQL: how long this node's lease lasts unrenewed (renewed every third of it); "
           "another server with --adopt takes its worlds over once it lapses");
 ABSL_FLAG(bool, adopt, false,
@@ -113,9 +136,9 @@ int main(int argc, char** argv) {
   sportsim::server::ServerConfig config;
   config.listen = absl::GetFlag(FLAGS_listen);
   config.metrics_listen = absl::GetFlag(FLAGS_metrics_listen);
-  config.keepalive_time = absl::GetFlag(FLAGS_keepalive_time);
-  config.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout);
-  config.min_client_ping_interval = absl::GetFlag(FLAGS_min_client_ping_interval);
+  config.keepalive_time = absl::GetFlag(FLAGS_keepalive_time).d;
+  config.keepalive_timeout = absl::GetFlag(FLAGS_keepalive_timeout).d;
+  config.min_client_ping_interval = absl::GetFlag(FLAGS_min_client_ping_interval).d;
   config.max_receive_message_bytes = absl::GetFlag(FLAGS_max_request_bytes);
   config.tables.world.max_worlds = absl::GetFlag(FLAGS_max_tables);
   config.tables.world.max_watchers = absl::GetFlag(FLAGS_max_watchers_per_table);
@@ -132,7 +155,7 @@ int main(int argc, char** argv) {
               << "\n";
     return 2;
   }
-  if (const absl::Duration grace = absl::GetFlag(FLAGS_shutdown_grace);
+  if (const absl::Duration grace = absl::GetFlag(FLAGS_shutdown_grace).d;
       grace < absl::ZeroDuration() || grace > absl::Hours(1)) {
     std::cerr << "sportsim-server: --shutdown_grace must be in [0s, 1h], got "
               << absl::FormatDuration(grace) << "\n";
@@ -144,7 +167,7 @@ int main(int argc, char** argv) {
   config.http_max_streams_per_client = absl::GetFlag(FLAGS_http_max_streams_per_client);
   config.work.workers = absl::GetFlag(FLAGS_sim_workers);
   config.work.max_queued = absl::GetFlag(FLAGS_max_queued_simulations);
-  config.work.cpu_budget = absl::GetFlag(FLAGS_max_request_cpu);
+  config.work.cpu_budget = absl::GetFlag(FLAGS_max_request_cpu).d;
   if (config.work.cpu_budget < absl::Milliseconds(10) || config.work.cpu_budget > absl::Hours(1)) {
     std::cerr << "sportsim-server: --max_request_cpu must be in [10ms, 1h], got "
               << absl::FormatDuration(config.work.cpu_budget) << "\n";
@@ -182,7 +205,7 @@ int main(int argc, char** argv) {
     char host[256] = {};
     config.store.node = gethostname(host, sizeof host - 1) == 0 && host[0] != 0 ? host : "local";
   }
-  config.store.lease = absl::GetFlag(FLAGS_lease);
+  config.store.lease = absl::GetFlag(FLAGS_lease).d;
   config.adopt = absl::GetFlag(FLAGS_adopt);
   if (!config.store.postgres_uri.empty() &&
       (config.store.lease < absl::Seconds(1) || config.store.lease > absl::Hours(1))) {
@@ -225,7 +248,7 @@ int main(int argc, char** argv) {
   sigwait(&stop_signals, &sig);
   std::cout << "sportsim-server: " << (sig == SIGINT ? "SIGINT" : "SIGTERM")
             << ", draining" << std::endl;
-  (*app)->Shutdown(absl::GetFlag(FLAGS_shutdown_grace));
+  (*app)->Shutdown(absl::GetFlag(FLAGS_shutdown_grace).d);
   (*app)->Wait();
   std::cout << "sportsim-server: stopped" << std::endl;
   return 0;

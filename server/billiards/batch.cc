@@ -31,6 +31,12 @@ absl::StatusOr<BatchJob> BatchJobFromProto(const v1::SimulateShotsRequest& reque
         "strikes x samples_per_strike is %d, above the %d outcomes of one batch",
         static_cast<int64_t>(request.strikes_size()) * samples, kMaxBatchOutcomes));
   }
+  if (static_cast<uint64_t>(request.first_index()) + static_cast<uint64_t>(request.strikes_size()) >
+      uint64_t{UINT32_MAX} + 1) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "first_index: %u plus %d strikes passes the largest index, %u", request.first_index(),
+        request.strikes_size(), UINT32_MAX));
+  }
   if (absl::Status s = CheckFiniteInRange("noise", request.noise(), 0, false, 100, false);
       !s.ok()) {
     return s;
@@ -64,6 +70,7 @@ absl::StatusOr<BatchJob> BatchJobFromProto(const v1::SimulateShotsRequest& reque
   if (request.max_time_s() != 0) job.max_time_s = request.max_time_s();
   job.samples = samples;
   job.seed = request.seed();
+  job.first_index = request.first_index();
   job.noise = request.noise();
   job.outcome = request.outcome();
   // A summary carries no ball states, so nothing reads the balls' orientation: its tracking
@@ -93,11 +100,12 @@ absl::StatusOr<BatchJob> BatchJobFromProto(const v1::SimulateShotsRequest& reque
 
 void ComputeOutcome(const BatchJob& job, int64_t n, const std::function<bool()>& stop,
                     v1::ShotOutcome* out) {
-  const int64_t index = n / job.samples;
+  const int64_t local = n / job.samples;
+  const uint64_t index = job.first_index + static_cast<uint64_t>(local);  // the batch's
   const int64_t sample = n % job.samples;
   out->set_index(static_cast<uint32_t>(index));
   out->set_sample(static_cast<uint32_t>(sample));
-  const BatchJob::Strike& s = job.strikes[static_cast<size_t>(index)];
+  const BatchJob::Strike& s = job.strikes[static_cast<size_t>(local)];
   if (s.cue < 0) {
     out->set_error(s.error);
     return;
@@ -108,7 +116,7 @@ void ComputeOutcome(const BatchJob& job, int64_t n, const std::function<bool()>&
   strike.noise = job.noise;
   // Sample k of strike i: a seed of (seed, i, k) alone, so that asking for more samples keeps
   // the ones already seen.
-  strike.seed = job.noise > 0 ? DeriveSeed(DeriveSeed(job.seed, static_cast<uint64_t>(index)),
+  strike.seed = job.noise > 0 ? DeriveSeed(DeriveSeed(job.seed, index),
                                            static_cast<uint64_t>(sample))
                               : 0;
   absl::StatusOr<b::StrikeOutcome> applied =

@@ -34,6 +34,7 @@ struct BatchJob {
   std::vector<Strike> strikes;
   int samples = 1;
   uint64_t seed = 0;
+  uint32_t first_index = 0;  ///< the batch's first strike's index (a chunk of a longer batch)
   double noise = 0.0;
   v1::ShotOutcomeKind outcome = v1::SHOT_OUTCOME_SUMMARY;
 

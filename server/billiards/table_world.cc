@@ -555,6 +555,7 @@ absl::StatusOr<v1::TableInfo> TableRegistry::Get(const v1::GetTableRequest& requ
   info.set_watchers(static_cast<uint32_t>(t.watchers.size()));
   info.set_engine(std::string(b::EngineName(t.solver.engine)));
   if (t.solver.engine == b::Engine::kStepped) info.set_dt_s(t.solver.dt_s);
+  info.set_aim_lines(t.aim_lines);
   if (request.include_geometry()) GeometryToProto(*t.model, info.mutable_geometry());
   if (t.game_view != nullptr) *info.mutable_game() = *t.game_view;
   return info;

@@ -20,6 +20,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
+#include "grpc/health/v1/health.pb.h"
 #include "server/rpc/status.h"
 
 namespace sportsim::server {
@@ -125,6 +126,10 @@ absl::StatusOr<std::unique_ptr<GrpcWebGateway>> GrpcWebGateway::Start(
     const GrpcWebConfig& config, std::shared_ptr<grpc::Channel> channel) {
   std::unique_ptr<GrpcWebGateway> g(new GrpcWebGateway(config));
   g->channel_ = std::move(channel);
+  // The methods are looked up in the generated descriptor pool. gRPC's built-in health service
+  // brings no descriptors of its own: touching health.proto's here links them in, so that
+  // /grpc.health.v1.Health/Check is served over gRPC-Web like every other unary RPC.
+  (void)grpc::health::v1::HealthCheckRequest::descriptor();
   const std::string threads = absl::StrCat(config.threads);
   const char* options[] = {"listening_ports", config.listen.c_str(),
                            "num_threads", threads.c_str(),

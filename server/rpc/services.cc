@@ -650,6 +650,7 @@ v1::GetInfoResponse MakeServerInfo() {
   info.set_version(SPORTSIM_VERSION);
   info.set_build_type(SPORTSIM_BUILD_TYPE);
   info.set_compiler(SPORTSIM_COMPILER);
+  info.set_build(std::string(SPORTSIM_BUILD_TYPE) + ", " + SPORTSIM_COMPILER);
   info.set_grpc_version(grpc::Version());
   info.set_protobuf_version(
       google::protobuf::internal::VersionString(GOOGLE_PROTOBUF_VERSION));
@@ -661,6 +662,7 @@ v1::GetInfoResponse MakeServerInfo() {
   for (const std::string& e : SwingEffectNames()) caps->add_swing_effects(e);
   for (v1::ParameterInfo& p : SwingParameterInfo()) *caps->add_swing_parameters() = std::move(p);
   GamesToProto(caps->mutable_games());
+  *caps->mutable_presets() = caps->table_presets();
   caps->add_services(v1::Server::service_full_name());
   caps->add_services(v1::Swing::service_full_name());
   caps->add_services(v1::Billiards::service_full_name());

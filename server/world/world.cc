@@ -62,9 +62,16 @@ std::string RandomHex(int bytes) {
 }
 
 absl::Status CheckToken(const std::string& token, std::string_view what) {
-  if (token.empty() || token.size() > 128) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("token: give the seat's token (%s returned it)", what));
+  // No token, or one no token can be, is a wrong token: PERMISSION_DENIED, like any other
+  // (a spectator acting), and checked before anything else is looked up.
+  if (token.empty()) {
+    return absl::PermissionDeniedError(
+        absl::StrFormat("token: none given: acting needs a seat's token (%s returned it)", what));
+  }
+  if (token.size() > 128) {
+    return absl::PermissionDeniedError(absl::StrFormat(
+        "token: not a token of this world (%d characters; %s returned the tokens)", token.size(),
+        what));
   }
   return absl::OkStatus();
 }

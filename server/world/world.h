@@ -39,7 +39,8 @@ uint64_t DeriveSeed(uint64_t seed, uint64_t n);
 /// `bytes` random bytes as lower-case hex, from std::random_device.
 std::string RandomHex(int bytes);
 
-/// A token must be 1 to 128 characters (`what`: "CreateTable", "CreateSession").
+/// A token must be 1 to 128 characters, else PERMISSION_DENIED like any wrong token (`what`:
+/// "CreateTable", "CreateSession", named in the message).
 absl::Status CheckToken(const std::string& token, std::string_view what);
 
 /// SHA-256 of a token (32 bytes). A world keeps only these, in memory and in the journal, so

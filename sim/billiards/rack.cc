@@ -13,8 +13,9 @@
 namespace sportsim::billiards {
 namespace {
 
-constexpr std::array<std::string_view, 6> kRacks = {"empty",   "8ball",         "9ball",
-                                                    "snooker", "three-cushion", "chapter19"};
+constexpr std::array<std::string_view, 7> kRacks = {"empty",   "8ball",         "9ball",
+                                                    "10ball",  "snooker",       "three-cushion",
+                                                    "chapter19"};
 
 Ball At(std::string id, double x, double y, double radius) {
   Ball b;
@@ -51,7 +52,7 @@ absl::StatusOr<std::vector<Ball>> MakeRack(std::string_view name, const TableMod
   std::vector<Ball> balls;
   if (name == "empty") {
     // No balls; place them with explicit positions.
-  } else if (name == "8ball" || name == "9ball") {
+  } else if (name == "8ball" || name == "9ball" || name == "10ball") {
     if (!bounded) return absl::InvalidArgumentError("rack " + std::string(name) + " needs a table with cushions");
     balls.push_back(At("cue", head.x(), head.y(), radius));
     if (name == "8ball") {
@@ -61,6 +62,17 @@ absl::StatusOr<std::vector<Ball>> MakeRack(std::string_view name, const TableMod
       const std::array<int, 15> order = {1, 9, 2, 10, 8, 3, 11, 4, 12, 5, 13, 6, 14, 15, 7};
       int k = 0;
       for (int row = 0; row < 5; ++row) {
+        for (int col = 0; col <= row; ++col) {
+          const Eigen::Vector2d p = TriangleSpot(foot, row, col, spacing);
+          balls.push_back(At(std::to_string(order[k++]), p.x(), p.y(), radius));
+        }
+      }
+    } else if (name == "10ball") {
+      // WPA 10-ball: a triangle of four rows, the 1 on the foot spot (the apex), the 10 in the
+      // centre of the third row, the rest in a fixed order.
+      const std::array<int, 10> order = {1, 2, 3, 4, 10, 5, 6, 7, 8, 9};
+      int k = 0;
+      for (int row = 0; row < 4; ++row) {
         for (int col = 0; col <= row; ++col) {
           const Eigen::Vector2d p = TriangleSpot(foot, row, col, spacing);
           balls.push_back(At(std::to_string(order[k++]), p.x(), p.y(), radius));
@@ -122,11 +134,11 @@ absl::StatusOr<std::vector<Ball>> MakeRack(std::string_view name, const TableMod
     balls.push_back(At("2", 0.0, 0.75 * d, radius));
   } else {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "rack must be one of empty, 8ball, 9ball, snooker, three-cushion, chapter19; got \"%s\"",
+        "rack must be one of empty, 8ball, 9ball, 10ball, snooker, three-cushion, chapter19; got \"%s\"",
         name));
   }
   // Seeded jitter of racked object balls (the cue ball and spotted balls stay put).
-  if (jitter_m > 0 && (name == "8ball" || name == "9ball" || name == "snooker")) {
+  if (jitter_m > 0 && (name == "8ball" || name == "9ball" || name == "10ball" || name == "snooker")) {
     std::mt19937_64 rng(seed);
     const auto uniform = [&rng]() { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
     const size_t last = name == "snooker" ? 16 : balls.size();

@@ -776,36 +776,14 @@ Group GroupOf(int number) {
 }
 
 absl::StatusOr<std::vector<Ball>> PoolRack(GameKind game, const TableModel& model) {
-  if (game == GameKind::kEightBall) return billiards::MakeRack("8ball", model);
-  if (game == GameKind::kNineBall) return billiards::MakeRack("9ball", model);
-  if (game != GameKind::kTenBall) {
-    return absl::InvalidArgumentError(
-        absl::StrFormat("%s is not a pool game", GameName(game)));
+  switch (game) {
+    case GameKind::kEightBall: return billiards::MakeRack("8ball", model);
+    case GameKind::kNineBall: return billiards::MakeRack("9ball", model);
+    case GameKind::kTenBall: return billiards::MakeRack("10ball", model);
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrFormat("%s is not a pool game", GameName(game)));
   }
-  // WPA 10-ball: a triangle of four rows, the 1 on the foot spot, the 10 in the centre of the
-  // third row; the cue ball on the head spot.
-  if (!model.spec().bounded) return absl::InvalidArgumentError("10ball needs a table with cushions");
-  const PoolMarks marks = PoolTableMarks(model);
-  const double r = model.radius();
-  const double d = 2.0 * r;
-  const double dx = d * std::sqrt(3.0) / 2.0;
-  const std::array<int, 10> order = {1, 2, 3, 4, 10, 5, 6, 7, 8, 9};
-  std::vector<Ball> balls;
-  const auto add = [&](std::string id, Eigen::Vector2d xy) {
-    Ball b;
-    b.id = std::move(id);
-    b.r = Eigen::Vector3d(xy.x(), xy.y(), r);
-    balls.push_back(std::move(b));
-  };
-  add("cue", marks.head_spot);
-  int k = 0;
-  for (int row = 0; row < 4; ++row) {
-    for (int col = 0; col <= row; ++col) {
-      add(std::to_string(order[k++]),
-          marks.foot_spot + Eigen::Vector2d(row * dx, (col - 0.5 * row) * d));
-    }
-  }
-  return balls;
 }
 
 const Referee& EightBallReferee() {

@@ -1092,6 +1092,23 @@ TEST_F(GrpcWebTest, UnaryCallInBinaryAndTextDecodesToTheSameMessage) {
   EXPECT_EQ(got[0].version(), "0.1.0");
 }
 
+// The standard health service is served over gRPC-Web too (a browser or a load balancer that
+// speaks only HTTP/1.1 can check the server), though it is gRPC's built-in one.
+TEST_F(GrpcWebTest, HealthCheckIsServed) {
+  // The messages by hand, so that this test links no health.proto code of its own (the
+  // server's gateway must bring the descriptors): HealthCheckRequest{service: ""} is empty,
+  // HealthCheckResponse{status: SERVING} is field 1, varint 1.
+  for (bool text : {false, true}) {
+    std::string body = Frame(0, "");
+    if (text) body = absl::Base64Escape(body);
+    const WebCall c = CallRaw("/grpc.health.v1.Health/Check", body, text);
+    EXPECT_EQ(c.http.status, 200);
+    EXPECT_EQ(c.grpc_status, 0) << c.grpc_message;
+    ASSERT_EQ(c.messages.size(), 1u);
+    EXPECT_EQ(c.messages[0], std::string("\x08\x01", 2));
+  }
+}
+
 TEST_F(GrpcWebTest, ErrorsComeAsGrpcStatusInTheTrailers) {
   v1::GetTableRequest r;
   r.set_table_id("no-such-table");

@@ -221,8 +221,10 @@ TEST_F(TablesTest, TurnsTokensAndMovingBalls) {
   spectator.set_token("0123456789abcdef0123456789abcdef");
   s = reg_.Shoot(spectator);
   EXPECT_EQ(s.status().code(), absl::StatusCode::kPermissionDenied);
-  spectator.set_token("");
-  EXPECT_EQ(reg_.Shoot(spectator).status().code(), absl::StatusCode::kInvalidArgument);
+  spectator.set_token("");  // no token is a wrong token
+  EXPECT_EQ(reg_.Shoot(spectator).status().code(), absl::StatusCode::kPermissionDenied);
+  spectator.set_token(std::string(200, 'a'));
+  EXPECT_EQ(reg_.Shoot(spectator).status().code(), absl::StatusCode::kPermissionDenied);
   // Seat 0 shoots and passes the turn; while balls move nobody shoots or places.
   v1::ShootRequest first = Shot(t, 0, Break());
   first.set_next_seat(1);

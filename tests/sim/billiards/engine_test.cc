@@ -491,7 +491,25 @@ TEST(ModelTest, ParametersAndPresetsAreValidated) {
   spec->params.cushion_height_m = 0.07;  // above the ball
   EXPECT_THAT(TableModel::Create(*spec).status().message(), HasSubstr("cushion_height_m"));
   EXPECT_FALSE(MakeRack("chapter19", Model("pool-9ft")).ok());
-  EXPECT_FALSE(MakeRack("10ball", Model("pool-9ft")).ok());
+  EXPECT_FALSE(MakeRack("10ball", Model("unbounded")).ok());
+  // The 10-ball rack: a triangle of four rows, the 1 on the foot spot, the 10 in the centre of
+  // the third row, touching neighbours two radii apart.
+  absl::StatusOr<std::vector<Ball>> ten = MakeRack("10ball", Model("pool-9ft"));
+  ASSERT_TRUE(ten.ok()) << ten.status();
+  ASSERT_EQ(ten->size(), 11u);
+  const TableModel pool = Model("pool-9ft");
+  const double foot = 0.25 * pool.spec().length_m;
+  const double d = 2 * pool.radius();
+  const auto at = [&](std::string_view id) {
+    for (const Ball& b : *ten) {
+      if (b.id == id) return Eigen::Vector2d(b.r.head<2>());
+    }
+    return Eigen::Vector2d(NAN, NAN);
+  };
+  EXPECT_NEAR((at("1") - Eigen::Vector2d(foot, 0)).norm(), 0, 1e-15);
+  EXPECT_NEAR((at("10") - Eigen::Vector2d(foot + 2 * d * std::sqrt(3.0) / 2, 0)).norm(), 0, 1e-15);
+  EXPECT_NEAR((at("1") - at("2")).norm(), d, 1e-12);
+  EXPECT_NEAR((at("cue") - Eigen::Vector2d(-foot, 0)).norm(), 0, 1e-15);
   // Every preset with pockets has six, each wider than a ball.
   for (std::string_view name : {"pool-7ft", "pool-8ft", "pool-9ft", "snooker"}) {
     const TableModel m = Model(name);
