@@ -408,8 +408,13 @@ Judgement PoolReferee::JudgeEightBreak(const Rules& rules, const TableModel& mod
   for (const Pocketing& p : f.pocketed) object_pocketed += p.ball != f.struck && p.pocket >= 0;
   const int object_rails = f.BallsReachingCushion(f.struck);
   const bool scratch = f.Pocketed(f.struck);
+  // The 8 driven off the table on the break is not a ball-off-table foul: like the 8 pocketed,
+  // it is spotted or the rack re-broken (WPA 3.5; RULES: "the 8 off the table (except on the
+  // break ...)").
   bool object_off = false;
-  for (const Pocketing& p : f.pocketed) object_off |= p.ball != f.struck && p.pocket < 0;
+  for (const Pocketing& p : f.pocketed) {
+    object_off |= p.ball != f.struck && p.ball != eight_idx && p.pocket < 0;
+  }
   const bool eight_down = eight_idx >= 0 && f.Pocketed(eight_idx);
   const BallInHand scratch_zone = rules.Variant("break_scratch_in_hand") == "kitchen"
                                       ? BallInHand::kKitchen
@@ -442,7 +447,9 @@ Judgement PoolReferee::JudgeEightBreak(const Rules& rules, const TableModel& mod
   } else if (scratch || object_off) {
     v.foul = true;
     v.reason = scratch ? "scratch" : "ball_off_table";
-    FoulHandOver(seat, scratch_zone, &j);
+    // The break-scratch setting is about a scratch; an object ball off the table is a standard
+    // foul: ball in hand anywhere.
+    FoulHandOver(seat, scratch ? scratch_zone : BallInHand::kAnywhere, &j);
     j.events.push_back({.kind = GameEventKind::kFoul, .seat = seat, .reason = v.reason});
   } else {
     v.turn_passes = object_pocketed == 0;
@@ -568,12 +575,13 @@ Judgement PoolReferee::JudgeRotation(const Rules& rules, const TableModel& model
   v.foul = foul;
   v.reason = reason;
   if (foul) {
+    const size_t foul_event = j.events.size();
     j.events.push_back({.kind = GameEventKind::kFoul, .seat = seat, .reason = reason});
     // The money ball pocketed on a foul or off the table is spotted; the rest stay down.
     if (money_down) Spot(model, money(), balls, &j);
     if (CountFoul(seat, &j)) {
       v.reason = "three_fouls";
-      j.events.back().reason = v.reason;
+      j.events[foul_event].reason = v.reason;  // the foul's own event (a respot may follow it)
       Lose(rules, model, seat, "three_fouls", MatchResult::kThreeFouls, balls, &j);
       Refresh(&s, *balls);
       return j;
@@ -711,7 +719,11 @@ absl::StatusOr<Judgement> PoolReferee::Decide(const Rules& rules, const TableMod
     Spot(model, 8, balls, &j);
     s.to_play = seat;
     // WPA 3.5: after a scratch with the 8 on the break, ball in hand behind the head string.
-    s.ball_in_hand = cue_down ? BallInHand::kKitchen : BallInHand::kNone;
+    // The breaker's opponent chooses only after a foul: without a scratch (an object ball off
+    // the table) that foul's ball in hand is anywhere.
+    s.ball_in_hand = cue_down             ? BallInHand::kKitchen
+                     : seat != s.breaker ? BallInHand::kAnywhere
+                                         : BallInHand::kNone;
   } else if (choice == "shoot") {
     s.to_play = seat;
   } else if (choice == "pass_back") {

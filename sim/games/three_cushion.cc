@@ -194,6 +194,21 @@ class ThreeCushion final : public Referee {
     }
   }
 
+  // UMB: a striker whose ball touches another plays away from it (or has the balls set up as
+  // for the opening). Playing into it is a foul: the struck ball's first contact is a ball it
+  // touched before the stroke, with no cushion of its own in between (coming back to it off a
+  // cushion is playing away; so is reaching the other ball first).
+  static bool PlayedIntoTouchingBall(const TableModel& model, const TableState& before,
+                                     const ShotFacts& f) {
+    if (f.struck < 0 || f.first_contacts.empty()) return false;
+    if (f.CushionHitsBefore(f.struck, f.first_contact_t_s) > 0) return false;
+    for (int b : f.first_contacts) {
+      const double d = (before.balls[b].r - before.balls[f.struck].r).head<2>().norm();
+      if (d <= 2.0 * model.radius() + kTouchingGapM) return true;
+    }
+    return false;
+  }
+
   // A ball that left the table goes back on its spot.
   void Respot(const TableModel& model, int index, TableState* balls) const {
     const PoolMarks m = PoolTableMarks(model);
@@ -232,6 +247,7 @@ Judgement ThreeCushion::Judge(const Rules& rules, const TableModel& model, const
   std::string foul;
   if (f.struck != own) foul = "wrong_cue_ball";
   if (foul.empty() && !f.pocketed.empty()) foul = "ball_off_table";
+  if (foul.empty() && PlayedIntoTouchingBall(model, record.before, f)) foul = "touching_ball";
   if (foul.empty() && opening && !f.first_contacts.empty() &&
       std::find(f.first_contacts.begin(), f.first_contacts.end(), red) == f.first_contacts.end()) {
     foul = "wrong_ball_first";

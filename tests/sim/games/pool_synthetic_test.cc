@@ -126,6 +126,44 @@ TEST(EightBall, EightOnTheBreakIsSpottedOrRebroken) {
   EXPECT_EQ(t.state.ball_in_hand, BallInHand::kKitchen);
 }
 
+// The 8 driven off the table on a clean break is the 8 down (spotted or re-broken, the
+// breaker's choice), not a ball-off-table foul; another object ball off the table with the 8
+// down is a foul: the opponent chooses, and spotting gives ball in hand anywhere (no scratch).
+TEST(EightBall, EightOffTheTableOnTheBreak) {
+  Table t = MakeTable(GameKind::kEightBall, {});
+  std::vector<Event> ev = {Hit(0.2, 0, Idx(t, "1"))};
+  for (const char* id : {"2", "3", "4", "5"}) ev.push_back(Rail(0.5, Idx(t, id)));  // legal
+  ev.push_back(Drop(0.8, Idx(t, "8"), -1));
+  const Judgement j = JudgeEvents(t, {}, ev);
+  EXPECT_FALSE(j.verdict.foul) << j.verdict.reason;
+  EXPECT_EQ(t.state.decision.seat, 0);
+  EXPECT_THAT(t.state.decision.choices, ElementsAre("spot_eight", "rebreak"));
+  Table u = MakeTable(GameKind::kEightBall, {});
+  const Judgement k = JudgeEvents(u, {}, {Hit(0.2, 0, Idx(u, "1")), Drop(0.8, Idx(u, "8"), 0),
+                                          Drop(0.9, Idx(u, "5"), -1)});
+  EXPECT_TRUE(k.verdict.foul);
+  EXPECT_EQ(k.verdict.reason, "ball_off_table");
+  EXPECT_EQ(u.state.decision.seat, 1);
+  ASSERT_TRUE(u.Decide(1, "spot_eight").ok());
+  EXPECT_EQ(u.state.to_play, 1);
+  EXPECT_EQ(u.state.ball_in_hand, BallInHand::kAnywhere);
+}
+
+// The break-scratch setting is about scratches: an object ball off the table on a legal break
+// (no scratch) gives ball in hand anywhere, whatever the setting.
+TEST(EightBall, ObjectBallOffTheTableOnTheBreakIsInHandAnywhere) {
+  for (const char* zone : {"anywhere", "kitchen"}) {
+    Table t = MakeTable(GameKind::kEightBall, {}, 1, {{"break_scratch_in_hand", zone}});
+    std::vector<Event> ev = {Hit(0.2, 0, Idx(t, "1"))};
+    for (const char* id : {"2", "3", "4", "5"}) ev.push_back(Rail(0.5, Idx(t, id)));
+    ev.push_back(Drop(1.0, Idx(t, "6"), -1));
+    const Judgement j = JudgeEvents(t, {}, ev);
+    EXPECT_EQ(j.verdict.reason, "ball_off_table");
+    EXPECT_EQ(t.state.to_play, 1);
+    EXPECT_EQ(t.state.ball_in_hand, BallInHand::kAnywhere) << zone;
+  }
+}
+
 TEST(EightBall, BreakScratchVariant) {
   for (const char* zone : {"anywhere", "kitchen"}) {
     Table t = MakeTable(GameKind::kEightBall, {}, 1, {{"break_scratch_in_hand", zone}});
@@ -177,6 +215,21 @@ TEST(NineBall, ThirdFoulWithoutTheWarningCountsAsTheSecond) {
       EXPECT_FALSE(t.state.match_over());
     }
   }
+}
+
+// A warned third foul that also pockets the 9: the foul's event says three_fouls, the respot
+// event stays a respot.
+TEST(NineBall, ThirdFoulWithTheNineDownLabelsTheFoulEvent) {
+  Table t = MakeTable(GameKind::kNineBall, {{"cue", -0.5, 0}, {"1", 0.3, 0.2}, {"9", 0.8, -0.3}});
+  t.state.fouls_in_row = {2, 0};
+  t.state.warned = {true, false};
+  const int tr = PocketIdx(t.model, "top_right");
+  const Judgement j = JudgeEvents(t, {}, {Hit(0.4, 0, Idx(t, "9")), Drop(1.0, Idx(t, "9"), tr)});
+  EXPECT_EQ(j.verdict.reason, "three_fouls");
+  std::vector<std::string> names = EventNames(j);
+  EXPECT_NE(std::find(names.begin(), names.end(), "foul:three_fouls"), names.end())
+      << ::testing::PrintToString(names);
+  for (const std::string& n : names) EXPECT_NE(n.rfind("respot:three_fouls", 0), 0u) << n;
 }
 
 TEST(NineBall, BallsOffTheTable) {

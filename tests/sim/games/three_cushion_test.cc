@@ -318,5 +318,35 @@ TEST(ThreeCushionSyntheticTest, TouchingBallsOfferPlayOrReset) {
   EXPECT_FALSE(t.ref.Decide(t.rules, t.model, j.state, 0, "respot", &b).ok());
 }
 
+// UMB: from a touching position the striker plays away from the touching ball. Real shots: the
+// white against the red, struck into the red (a foul, no point, the inning ends) and away from
+// it (no foul).
+TEST(ThreeCushionScenarioTest, PlayingIntoTheTouchingBallIsAFoul) {
+  Table t;
+  const double r = t.model.radius();
+  TableState s = Layout(t, {-0.3, 0.0}, {0.7, 0.35}, {-0.3 + 2 * r, 0.0});
+  GameState st = StartMatch(t.rules, t.model, Start::kInPlay, &s).value();
+  const ShotRecord into = Play(t, s, CueStrike{.speed_mps = 2.0, .phi_rad = 0.0}, "cue");
+  TableState after = into.after;
+  const Judgement j = t.ref.Judge(t.rules, t.model, st, {}, into, &after);
+  EXPECT_TRUE(j.verdict.foul);
+  EXPECT_EQ(j.verdict.reason, "touching_ball");
+  EXPECT_EQ(j.verdict.points, 0);
+  EXPECT_EQ(j.state.to_play, 1);
+  const ShotRecord away = Play(t, s, CueStrike{.speed_mps = 2.0, .phi_rad = M_PI}, "cue");
+  after = away.after;
+  const Judgement k = t.ref.Judge(t.rules, t.model, st, {}, away, &after);
+  EXPECT_FALSE(k.verdict.foul) << k.verdict.reason;
+  // Reaching the other object ball first, struck away from the red, is playing away too.
+  TableState u = Layout(t, {-0.3, 0.0}, {-1.0, 0.3}, {-0.3 + 2 * r, 0.0});
+  GameState su = StartMatch(t.rules, t.model, Start::kInPlay, &u).value();
+  const double to_yellow = std::atan2(0.3, -0.7);
+  const ShotRecord other = Play(t, u, CueStrike{.speed_mps = 2.0, .phi_rad = to_yellow}, "cue");
+  ASSERT_FALSE(other.events.empty());
+  after = other.after;
+  const Judgement o = t.ref.Judge(t.rules, t.model, su, {}, other, &after);
+  EXPECT_FALSE(o.verdict.foul) << o.verdict.reason;
+}
+
 }  // namespace
 }  // namespace sportsim::games
