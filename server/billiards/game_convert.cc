@@ -127,7 +127,9 @@ void GameStateToProto(const g::GameState& s, std::optional<double> deadline_s,
   out->set_race_to(static_cast<uint32_t>(s.race_to));
   for (int w : s.frames_won) out->add_frames_won(static_cast<uint32_t>(w));
   out->set_to_play(static_cast<uint32_t>(s.to_play));
-  out->set_ball_in_hand(std::string(g::BallInHandName(s.ball_in_hand)));
+  if (s.game != g::GameKind::kThreeCushion) {
+    out->set_ball_in_hand(std::string(g::BallInHandName(s.ball_in_hand)));
+  }
   for (const std::string& id : s.on) out->add_on(id);
   if (s.game == g::GameKind::kEightBall) {
     for (int seat = 0; seat < 2; ++seat) {
@@ -146,14 +148,16 @@ void GameStateToProto(const g::GameState& s, std::optional<double> deadline_s,
   if (s.game == g::GameKind::kNineBall || s.game == g::GameKind::kTenBall) {
     for (bool w : s.warned) out->add_warned(w);
   }
-  out->set_call_required(s.call_required);
-  out->set_push_out_available(s.push_out_available);
+  if (s.game != g::GameKind::kThreeCushion) out->set_call_required(s.call_required);
+  if (s.game == g::GameKind::kNineBall || s.game == g::GameKind::kTenBall) {
+    out->set_push_out_available(s.push_out_available);
+  }
   if (s.decision.pending()) {
     out->mutable_decision()->set_seat(static_cast<uint32_t>(s.decision.seat));
     for (const std::string& c : s.decision.choices) out->mutable_decision()->add_choices(c);
   }
   if (s.match_over() && s.winner >= 0) out->set_winner(static_cast<uint32_t>(s.winner));
-  out->set_result(std::string(g::MatchResultName(s.result)));
+  if (s.match_over()) out->set_result(std::string(g::MatchResultName(s.result)));
   if (deadline_s.has_value()) out->set_shot_clock_deadline_s(*deadline_s);
   out->set_breaker(static_cast<uint32_t>(s.breaker));
   out->set_is_break(s.is_break);

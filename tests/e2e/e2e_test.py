@@ -754,8 +754,16 @@ class GamesAgainstServer(unittest.TestCase):
         self.assertEqual(game["on"], ["1"])
         self.assertFalse(game["push_out_available"])  # in-play: no push-out
         # Keys that do not apply to 9-ball, or not yet, are absent.
-        for key in ("groups", "scores", "decision", "winner", "shot_clock_deadline_s"):
+        for key in ("groups", "scores", "decision", "winner", "shot_clock_deadline_s", "result",
+                    "phase", "free_ball"):
             self.assertNotIn(key, game)
+        # Nor push-outs outside 9- and 10-ball, nor ball in hand and calls in three-cushion.
+        eight = self.cli_json("table", "create", "--game", "8ball")["game"]
+        self.assertNotIn("push_out_available", eight)
+        self.assertEqual(eight["ball_in_hand"], "kitchen")
+        carom = self.cli_json("table", "create", "--game", "three-cushion")["game"]
+        for key in ("push_out_available", "ball_in_hand", "call_required", "result"):
+            self.assertNotIn(key, carom)
 
         info = self.cli_json("table", "get", table)
         self.assertEqual(info["game"]["on"], ["1"])
