@@ -286,6 +286,15 @@ std::string EventNote(const v1::SwingEvent& e) {
     case v1::SWING_EVENT_RESET: return "back at the address position";
     case v1::SWING_EVENT_BEYOND_HUMAN:
       return absl::StrFormat("beyond human at t = %.4f s: %s", e.t_s(), e.reason());
+    case v1::SWING_EVENT_BALL_LAUNCH:
+      return absl::StrFormat("ball launched at %.2f m/s, %.2f deg up, %.0f rpm backspin",
+                             e.ball().launch().ball_speed_mps(),
+                             e.ball().launch().launch_angle_deg(), e.ball().backspin_rpm());
+    case v1::SWING_EVENT_LANDING:
+      return absl::StrFormat("ball lands at t = %.4f s: carry %.2f m, %.2f m %s of the line",
+                             e.t_s(), e.ball().flight().carry_m(),
+                             std::abs(e.ball().flight().lateral_m()),
+                             e.ball().flight().lateral_m() >= 0 ? "right" : "left");
     default: return "";
   }
 }

@@ -221,7 +221,32 @@ void SessionKind::Publish(SessionHost& /*host*/, Session& s, TickOut* out,
       case sw::LiveSwingEvent::Kind::kImpact:
         e = SwingEvent(v1::SWING_EVENT_IMPACT, le.t_s, s.swings, tick);
         ImpactToProto(le.impact, e.mutable_impact());
-        if (launch < out->launches.size()) *e.mutable_ball() = out->launches[launch++];
+        if (launch < out->launches.size()) {
+          const v1::BallLaunch& ball = out->launches[launch++];
+          *e.mutable_ball() = ball;
+          if (ball.error().empty()) {
+            // The ball leaves the face and, its flight computed at once, where and when it
+            // lands: separate events a watcher can key on, after the impact's.
+            v1::SwingEvent off = SwingEvent(v1::SWING_EVENT_BALL_LAUNCH, le.t_s, s.swings, tick);
+            *off.mutable_ball() = ball;
+            off.mutable_ball()->clear_flight();
+            v1::SwingEvent land;
+            if (ball.has_flight()) {
+              land = SwingEvent(v1::SWING_EVENT_LANDING, le.t_s + ball.flight().flight_time_s(),
+                                s.swings, tick);
+              *land.mutable_ball() = ball;
+              land.mutable_ball()->mutable_flight()->clear_samples();
+            }
+            e.set_seat(s.seat);
+            fresh->push_back(s.Log(std::move(e)));
+            e = std::move(off);
+            if (land.kind() == v1::SWING_EVENT_LANDING) {
+              e.set_seat(s.seat);
+              fresh->push_back(s.Log(std::move(e)));
+              e = std::move(land);
+            }
+          }
+        }
         break;
       case sw::LiveSwingEvent::Kind::kBeyondHuman:
         e = SwingEvent(v1::SWING_EVENT_BEYOND_HUMAN, le.t_s, s.swings, tick);

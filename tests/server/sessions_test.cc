@@ -467,6 +467,28 @@ TEST_F(SessionsTest, ImpactEventCarriesTheLaunchedBallAndItsFlight) {
   EXPECT_LT(got.launch().launch_direction_deg(), 0.0);  // an out-to-in path starts it left
   // 0.1 s samples: about ten a second of flight, plus the landing.
   EXPECT_NEAR(got.flight().samples_size(), got.flight().flight_time_s() / 0.1 + 2, 1.0);
+  // The ball's launch and landing as events of their own, right after the impact's: the launch
+  // at the impact's time without the flight, the landing at impact + flight time with the
+  // flight's summary.
+  const std::vector<v1::SwingEvent> launches = EventsOf(sink.got(), v1::SWING_EVENT_BALL_LAUNCH);
+  const std::vector<v1::SwingEvent> landings = EventsOf(sink.got(), v1::SWING_EVENT_LANDING);
+  ASSERT_EQ(launches.size(), 1u);
+  ASSERT_EQ(landings.size(), 1u);
+  std::vector<v1::SwingEventKind> order;
+  for (const v1::SwingEvent& e : EventsOf(sink.got())) order.push_back(e.kind());
+  const auto at = std::find(order.begin(), order.end(), v1::SWING_EVENT_IMPACT);
+  ASSERT_LE(at + 3, order.end());
+  EXPECT_EQ(at[1], v1::SWING_EVENT_BALL_LAUNCH);
+  EXPECT_EQ(at[2], v1::SWING_EVENT_LANDING);
+  EXPECT_EQ(launches[0].sequence(), impacts[0].sequence());  // the same tick's
+  EXPECT_EQ(landings[0].sequence(), impacts[0].sequence());
+  EXPECT_EQ(launches[0].t_s(), impacts[0].t_s());
+  EXPECT_TRUE(MessageDifferencer::Equals(launches[0].ball().launch(), got.launch()));
+  EXPECT_FALSE(launches[0].ball().has_flight());
+  EXPECT_EQ(landings[0].t_s(), impacts[0].t_s() + got.flight().flight_time_s());
+  EXPECT_EQ(landings[0].ball().flight().carry_m(), got.flight().carry_m());
+  EXPECT_EQ(landings[0].ball().flight().samples_size(), 0);
+  EXPECT_EQ(landings[0].tick(), impacts[0].tick());
 
   v1::CreateSessionRequest bad;
   bad.mutable_ball()->set_club("driver");
