@@ -391,7 +391,7 @@ class SteppedEngine {
         const MotionState fa = a.state, fb = b.state;
         if (!CollideBalls(model_, o_.effects, &a, &b)) return;
         Record({.t_s = s_->t_s, .kind = EventKind::kBallBall, .a = c.a, .b = c.b,
-                .va = a.v.head<2>(), .vb = b.v.head<2>()});
+                .va = a.v.head<2>(), .vb = b.v.head<2>(), .ra = a.r.head<2>()});
         RecordTransition(c.a, fa);
         RecordTransition(c.b, fb);
         break;
@@ -404,7 +404,7 @@ class SteppedEngine {
         const MotionState fa = a.state;
         if (!CollideCushion(model_, n, &a)) return;
         Record({.t_s = s_->t_s, .kind = EventKind::kBallCushion, .a = c.a, .other = c.other,
-                .va = a.v.head<2>()});
+                .va = a.v.head<2>(), .ra = a.r.head<2>()});
         RecordTransition(c.a, fa);
         break;
       }
@@ -421,7 +421,8 @@ class SteppedEngine {
     b.w.setZero();
     b.state = MotionState::kPocketed;
     b.pocket = pocket;
-    Record({.t_s = s_->t_s, .kind = EventKind::kBallPocket, .a = i, .other = pocket});
+    Record({.t_s = s_->t_s, .kind = EventKind::kBallPocket, .a = i, .other = pocket,
+            .ra = b.r.head<2>()});
     RecordTransition(i, from);
   }
 

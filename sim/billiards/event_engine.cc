@@ -907,7 +907,8 @@ class EventSimulation final : public TableSimulation {
         if (ri || rj) {
           events->push_back({.t_s = t_, .kind = EventKind::kBallBall, .a = i, .b = j,
                              .va = cluster_balls_[si].v.head<2>(),
-                             .vb = cluster_balls_[sj].v.head<2>()});
+                             .vb = cluster_balls_[sj].v.head<2>(),
+                             .ra = cluster_balls_[si].r.head<2>()});
         }
       } else {
         ++counts_.ball_ball_push;
@@ -1169,7 +1170,7 @@ class EventSimulation final : public TableSimulation {
       const bool ra = Report(ia, ib, plastic), rb = Report(ib, ia, plastic);
       if (ra || rb) {
         events->push_back({.t_s = t_, .kind = EventKind::kBallBall, .a = ia, .b = ib,
-                           .va = a.v.head<2>(), .vb = b.v.head<2>()});
+                           .va = a.v.head<2>(), .vb = b.v.head<2>(), .ra = a.r.head<2>()});
       }
     }
     RecordTransition(t_, ia, fa, a, events);
@@ -1197,7 +1198,7 @@ class EventSimulation final : public TableSimulation {
       counts_.state_changes += a.state != from;
       if (hit && Report(ia, -2 - k, plastic)) {
         events->push_back({.t_s = t_, .kind = EventKind::kBallCushion, .a = ia, .other = k,
-                           .va = a.v.head<2>()});
+                           .va = a.v.head<2>(), .ra = a.r.head<2>()});
       }
       RecordTransition(t_, ia, from, a, events);
       SetOrigin(ia, a, t_);
@@ -1222,7 +1223,8 @@ class EventSimulation final : public TableSimulation {
     a.w.setZero();
     a.state = MotionState::kPocketed;
     state_.balls[ia].pocket = k;
-    events->push_back({.t_s = t_, .kind = EventKind::kBallPocket, .a = ia, .other = k});
+    events->push_back({.t_s = t_, .kind = EventKind::kBallPocket, .a = ia, .other = k,
+                       .ra = a.r.head<2>()});
     RecordTransition(t_, ia, from, a, events);
     SetOrigin(ia, a, t_);
     Repredict(ia);

@@ -42,7 +42,7 @@ void RecordTransition(double t_s, int i, MotionState from, const Ball& b,
                       std::vector<Event>* events) {
   if (b.state == from) return;
   events->push_back({.t_s = t_s, .kind = EventKind::kTransition, .a = i, .from = from,
-                     .to = b.state, .va = b.v.head<2>()});
+                     .to = b.state, .va = b.v.head<2>(), .ra = b.r.head<2>()});
 }
 
 }  // namespace sportsim::billiards

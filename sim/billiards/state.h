@@ -72,6 +72,7 @@ struct Event {
   MotionState to = MotionState::kStationary;
   Eigen::Vector2d va = Eigen::Vector2d::Zero();  ///< ball a's velocity after (m/s)
   Eigen::Vector2d vb = Eigen::Vector2d::Zero();  ///< ball b's velocity after (m/s)
+  Eigen::Vector2d ra = Eigen::Vector2d::Zero();  ///< ball a's centre at the event (m)
 };
 
 /// Appends ball i's change of motion state (from `from` to b.state) at t_s; nothing when the

@@ -295,7 +295,14 @@ ShotFacts ExtractFacts(const ShotRecord& record) {
   const size_t n = std::max(record.before.balls.size(), record.after.balls.size());
   f.cushion_t_s.resize(n);
   f.cushion_segments.resize(n);
+  if (f.struck >= 0 && f.struck < static_cast<int>(record.before.balls.size())) {
+    f.struck_path.push_back(record.before.balls[f.struck].r.head<2>());
+  }
   for (const billiards::Event& e : record.events) {
+    if (e.a == f.struck && e.kind != billiards::EventKind::kBallBall &&
+        f.first_contacts.empty()) {
+      f.struck_path.push_back(e.ra);
+    }
     switch (e.kind) {
       case billiards::EventKind::kBallBall: {
         if (e.a != f.struck && e.b != f.struck) break;

@@ -163,6 +163,10 @@ struct ShotFacts {
   std::vector<std::vector<int>> cushion_segments;
   /// Pocketings and balls leaving the table, in time order.
   std::vector<Pocketing> pocketed;
+  /// Where the struck ball was before its first ball contact: its place before the shot, then
+  /// its centre at each of its own events (cushion hits, changes of motion) before that
+  /// contact, in time order (every one of them when it touches no ball).
+  std::vector<Eigen::Vector2d> struck_path;
 
   bool Touched(int ball) const;                    ///< the struck ball touched it
   bool Pocketed(int ball) const;                   ///< pocketed or off the table

@@ -334,10 +334,12 @@ struct FoulCheck {
 };
 
 // From the kitchen, the cue ball must cross the head string before touching a ball that lies
-// behind it (WPA 1.? "cue ball in hand behind the head string"). Events carry no positions, so
-// a crossing is proven by a cushion hit on a segment wholly beyond the string before the first
-// contact; a crossing without a cushion in between is not seen (an object ball in the kitchen
-// reached straight from the kitchen is always a foul).
+// behind it (WPA: with the cue ball in hand behind the head string, the first ball it contacts
+// must lie beyond the string, or the cue ball must cross the string before that contact). The
+// crossing is judged on the cue ball's centre at its own events before the contact (cushion
+// hits, slide and roll changes: ShotFacts::struck_path): one beyond the string proves it.
+// A path that crosses and comes back between two events (a hard draw off the line, with no
+// cushion) is not seen.
 bool KitchenViolation(const TableModel& model, const GameState& state, const ShotFacts& f,
                       const TableState& before) {
   if (state.ball_in_hand != BallInHand::kKitchen || f.first_contacts.empty()) return false;
@@ -345,12 +347,8 @@ bool KitchenViolation(const TableModel& model, const GameState& state, const Sho
     if (!BehindHeadString(model, before.balls[b].r.head<2>())) return false;
   }
   const double string_x = PoolTableMarks(model).head_string_x;
-  const auto& segs = f.cushion_segments[f.struck];
-  const auto& times = f.cushion_t_s[f.struck];
-  for (size_t i = 0; i < segs.size(); ++i) {
-    if (times[i] >= f.first_contact_t_s) break;
-    const billiards::CushionSegment& c = model.spec().cushions[segs[i]];
-    if (c.a.x() > string_x && c.b.x() > string_x) return false;
+  for (const Eigen::Vector2d& p : f.struck_path) {
+    if (p.x() > string_x) return false;
   }
   return true;
 }

@@ -21,8 +21,9 @@ using ::testing::HasSubstr;
 constexpr double kSpotTolM = 1e-9;  // (m)
 
 Event Hit(double t, int a, int b) { return {.t_s = t, .kind = EventKind::kBallBall, .a = a, .b = b}; }
-Event Rail(double t, int a, int seg = 0) {
-  return {.t_s = t, .kind = EventKind::kBallCushion, .a = a, .other = seg};
+// A cushion hit of ball a on segment seg, the ball's centre then at `at`.
+Event Rail(double t, int a, int seg = 0, Eigen::Vector2d at = Eigen::Vector2d::Zero()) {
+  return {.t_s = t, .kind = EventKind::kBallCushion, .a = a, .other = seg, .ra = at};
 }
 Event Drop(double t, int a, int pocket) {
   return {.t_s = t, .kind = EventKind::kBallPocket, .a = a, .other = pocket};
@@ -192,8 +193,30 @@ TEST(EightBall, KitchenCueBallMustCrossTheString) {
   }
   Table u = MakeTable(GameKind::kEightBall, {{"cue", -1.0, 0}, {"3", -0.8, 0.2}, {"8", 0.6, -0.2}, {"12", 0.3, 0.4}});
   u.state.ball_in_hand = BallInHand::kKitchen;
-  const Judgement ok = JudgeEvents(u, {.safety = true}, {Rail(0.3, 0, foot), Hit(1.4, 0, Idx(u, "3")), Rail(1.8, Idx(u, "3"))});
+  const double foot_x = 0.5 * u.model.spec().length_m - u.model.radius();
+  const Judgement ok = JudgeEvents(u, {.safety = true}, {Rail(0.3, 0, foot, {foot_x, 0.0}), Hit(1.4, 0, Idx(u, "3")), Rail(1.8, Idx(u, "3"))});
   EXPECT_FALSE(ok.verdict.foul) << ok.verdict.reason;
+  // A long rail: its segment from the head corner to the side pocket spans the string, so the
+  // place of the hit decides. Beyond the string: crossed, legal; behind it: a foul.
+  int side = -1;
+  for (size_t i = 0; i < u.model.spec().cushions.size(); ++i) {
+    const billiards::CushionSegment& c = u.model.spec().cushions[i];
+    const double string_x = PoolTableMarks(u.model).head_string_x;
+    if (std::min(c.a.x(), c.b.x()) < string_x && std::max(c.a.x(), c.b.x()) > string_x &&
+        c.a.y() == c.b.y()) {
+      side = static_cast<int>(i);
+    }
+  }
+  ASSERT_GE(side, 0);
+  const double rail_y = u.model.spec().cushions[side].a.y();
+  const double string_x = PoolTableMarks(u.model).head_string_x;
+  for (const double dx : {0.2, -0.2}) {
+    Table w = MakeTable(GameKind::kEightBall, {{"cue", -1.0, 0}, {"3", -0.8, 0.2}, {"8", 0.6, -0.2}, {"12", 0.3, 0.4}});
+    w.state.ball_in_hand = BallInHand::kKitchen;
+    const Eigen::Vector2d at(string_x + dx, rail_y - std::copysign(w.model.radius(), rail_y));
+    const Judgement bank = JudgeEvents(w, {.safety = true}, {Rail(0.3, 0, side, at), Hit(1.4, 0, Idx(w, "3")), Rail(1.8, Idx(w, "3"))});
+    EXPECT_EQ(bank.verdict.foul, dx < 0) << dx << " " << bank.verdict.reason;
+  }
 }
 
 TEST(NineBall, ThirdFoulWithoutTheWarningCountsAsTheSecond) {
