@@ -105,8 +105,9 @@ TEST_F(ServerTest, GetInfoListsTheBilliardsCapabilities) {
   EXPECT_THAT(c.table_presets(), ::testing::UnorderedElementsAre(
                                      "pool-7ft", "pool-8ft", "pool-9ft", "snooker", "carom",
                                      "unbounded"));
-  EXPECT_THAT(c.racks(), ::testing::UnorderedElementsAre("empty", "8ball", "9ball", "snooker",
-                                                         "three-cushion", "chapter19"));
+  EXPECT_THAT(c.racks(), ::testing::UnorderedElementsAre("empty", "8ball", "9ball", "10ball",
+                                                         "snooker", "three-cushion", "chapter19"));
+  EXPECT_THAT(c.presets(), ::testing::ElementsAreArray(c.table_presets()));
   // The documented effects (docs/cli.md) for --disable.
   EXPECT_THAT(c.effects(), ::testing::UnorderedElementsAre(
                                "drag", "spin_decay", "rolling_resistance", "ball_friction",
