@@ -114,8 +114,12 @@ TEST(MetricsTest, ScrapeShowsWorldsRpcsRejectionsAndTicks) {
             1);
   EXPECT_EQ(Value(text, "sportsim_rejected_inputs_total", {"code=\"NOT_FOUND\""}), 2);
   // The chapter's swing takes about 0.29 s: over 100 ticks at 400 Hz.
-  EXPECT_GT(Value(text, "sportsim_ticks_total", {"world=\"session\""}), 100);
-  EXPECT_GT(Value(text, "sportsim_tick_duration_seconds_count", {}), 100);
+  const double session_ticks = Value(text, "sportsim_ticks_total", {"world=\"session\""});
+  EXPECT_GT(session_ticks, 100);
+  // The histogram counts wakes, and one wake of a world that fell behind advances up to
+  // max_catchup_ticks (12 by default) ticks at once: a loaded machine (a sanitizer build, other
+  // jobs) has fewer wakes than ticks, never fewer than ticks / 12.
+  EXPECT_GE(Value(text, "sportsim_tick_duration_seconds_count", {}), session_ticks / 12);
   EXPECT_THAT(text, HasSubstr("sportsim_tick_duration_seconds_bucket{le=\"+Inf\"}"));
   EXPECT_GE(Value(text, "sportsim_late_ticks_total", {"world=\"table\""}), 0);
   // Ids never become labels.
