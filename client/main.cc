@@ -392,7 +392,8 @@ const char* CodeName(int code) {
 namespace {
 
 // The request fields the server's messages name, and the flags that set them. A message that
-// names one gets the flag after it, so that "place it with table.balls" points at --ball.
+// names one gets the flag appended (WithFlagNames), so that "place it with table.balls" points
+// at --ball.
 struct FieldFlag {
   std::string_view field;
   std::string_view flag;

@@ -205,6 +205,7 @@ void SessionKind::Publish(SessionHost& /*host*/, Session& s, TickOut* out,
   for (const sw::LiveSwingEvent& le : out->events) {
     const int64_t tick = s.start_tick + le.n;
     v1::SwingEvent e;
+    std::vector<v1::SwingEvent> then;  // logged right after e
     switch (le.kind) {
       case sw::LiveSwingEvent::Kind::kTorque:
         e = SwingEvent(v1::SWING_EVENT_TORQUE, le.t_s, s.swings, tick);
@@ -226,24 +227,17 @@ void SessionKind::Publish(SessionHost& /*host*/, Session& s, TickOut* out,
           *e.mutable_ball() = ball;
           if (ball.error().empty()) {
             // The ball leaves the face and, its flight computed at once, where and when it
-            // lands: separate events a watcher can key on, after the impact's.
-            v1::SwingEvent off = SwingEvent(v1::SWING_EVENT_BALL_LAUNCH, le.t_s, s.swings, tick);
+            // lands: events of their own a watcher can key on, after the impact's.
+            v1::SwingEvent& off = then.emplace_back(
+                SwingEvent(v1::SWING_EVENT_BALL_LAUNCH, le.t_s, s.swings, tick));
             *off.mutable_ball() = ball;
             off.mutable_ball()->clear_flight();
-            v1::SwingEvent land;
             if (ball.has_flight()) {
-              land = SwingEvent(v1::SWING_EVENT_LANDING, le.t_s + ball.flight().flight_time_s(),
-                                s.swings, tick);
+              v1::SwingEvent& land = then.emplace_back(SwingEvent(
+                  v1::SWING_EVENT_LANDING, le.t_s + ball.flight().flight_time_s(), s.swings,
+                  tick));
               *land.mutable_ball() = ball;
               land.mutable_ball()->mutable_flight()->clear_samples();
-            }
-            e.set_seat(s.seat);
-            fresh->push_back(s.Log(std::move(e)));
-            e = std::move(off);
-            if (land.kind() == v1::SWING_EVENT_LANDING) {
-              e.set_seat(s.seat);
-              fresh->push_back(s.Log(std::move(e)));
-              e = std::move(land);
             }
           }
         }
@@ -258,6 +252,10 @@ void SessionKind::Publish(SessionHost& /*host*/, Session& s, TickOut* out,
     }
     e.set_seat(s.seat);
     fresh->push_back(s.Log(std::move(e)));
+    for (v1::SwingEvent& next : then) {
+      next.set_seat(s.seat);
+      fresh->push_back(s.Log(std::move(next)));
+    }
   }
 }
 
