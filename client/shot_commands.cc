@@ -342,10 +342,11 @@ int RunBatch(const Context& ctx, const std::vector<std::string>& args) {
     request.set_first_index(static_cast<uint32_t>(first));
     size_t bytes = 0;
     size_t next = first;
-    while (next < strikes.size() && request.strikes_size() < per_chunk &&
-           (request.strikes_size() == 0 || bytes + strikes[next].ByteSizeLong() + 4 <= kChunkStrikeBytes)) {
-      bytes += strikes[next].ByteSizeLong() + 4;  // + the field's tag and length
-      *request.add_strikes() = strikes[next++];
+    while (next < strikes.size() && request.strikes_size() < per_chunk) {
+      const size_t size = strikes[next].ByteSizeLong() + 4;  // + the field's tag and length
+      if (request.strikes_size() > 0 && bytes + size > kChunkStrikeBytes) break;
+      bytes += size;
+      *request.add_strikes() = std::move(strikes[next++]);  // each strike is sent once
     }
     std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
     std::unique_ptr<grpc::ClientReader<v1::SimulateShotsResponse>> reader =

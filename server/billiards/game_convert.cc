@@ -121,6 +121,7 @@ void GameStateToProto(const g::GameState& s, std::optional<double> deadline_s,
                       v1::GameState* out) {
   const bool pool = s.game == g::GameKind::kEightBall || s.game == g::GameKind::kNineBall ||
                     s.game == g::GameKind::kTenBall;
+  const bool rotation = s.game == g::GameKind::kNineBall || s.game == g::GameKind::kTenBall;
   const bool points = s.game == g::GameKind::kSnooker || s.game == g::GameKind::kThreeCushion;
   out->set_name(std::string(g::GameName(s.game)));
   out->set_frame(static_cast<uint32_t>(s.frame));
@@ -145,13 +146,11 @@ void GameStateToProto(const g::GameState& s, std::optional<double> deadline_s,
   if (pool || s.game == g::GameKind::kSnooker) {
     for (int f : s.fouls_in_row) out->add_fouls_in_row(static_cast<uint32_t>(f));
   }
-  if (s.game == g::GameKind::kNineBall || s.game == g::GameKind::kTenBall) {
+  if (rotation) {
     for (bool w : s.warned) out->add_warned(w);
-  }
-  if (s.game != g::GameKind::kThreeCushion) out->set_call_required(s.call_required);
-  if (s.game == g::GameKind::kNineBall || s.game == g::GameKind::kTenBall) {
     out->set_push_out_available(s.push_out_available);
   }
+  if (s.game != g::GameKind::kThreeCushion) out->set_call_required(s.call_required);
   if (s.decision.pending()) {
     out->mutable_decision()->set_seat(static_cast<uint32_t>(s.decision.seat));
     for (const std::string& c : s.decision.choices) out->mutable_decision()->add_choices(c);

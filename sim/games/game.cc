@@ -294,7 +294,6 @@ ShotFacts ExtractFacts(const ShotRecord& record) {
   f.struck = record.struck;
   const size_t n = std::max(record.before.balls.size(), record.after.balls.size());
   f.cushion_t_s.resize(n);
-  f.cushion_segments.resize(n);
   if (f.struck >= 0 && f.struck < static_cast<int>(record.before.balls.size())) {
     f.struck_path.push_back(record.before.balls[f.struck].r.head<2>());
   }
@@ -325,7 +324,6 @@ ShotFacts ExtractFacts(const ShotRecord& record) {
       case billiards::EventKind::kBallCushion:
         if (e.a >= 0 && e.a < static_cast<int>(n)) {
           f.cushion_t_s[e.a].push_back(e.t_s);
-          f.cushion_segments[e.a].push_back(e.other);
         }
         break;
       case billiards::EventKind::kBallPocket:

@@ -159,8 +159,6 @@ struct ShotFacts {
   std::vector<Contact> struck_contacts;
   /// Per ball index: the times of its cushion hits, ascending (s).
   std::vector<std::vector<double>> cushion_t_s;
-  /// Per ball index: the cushion segments hit, in the order of cushion_t_s.
-  std::vector<std::vector<int>> cushion_segments;
   /// Pocketings and balls leaving the table, in time order.
   std::vector<Pocketing> pocketed;
   /// Where the struck ball was before its first ball contact: its place before the shot, then

@@ -175,6 +175,13 @@ class ThreeCushion final : public Referee {
                    &j->events);
   }
 
+  // Balls i and j touch (within kTouchingGapM): the test of both the offer below and the foul
+  // of playing into the touching ball.
+  static bool Touching(const TableModel& model, const TableState& balls, int i, int j) {
+    const double d = (balls.balls[i].r - balls.balls[j].r).head<2>().norm();
+    return d <= 2.0 * model.radius() + kTouchingGapM;
+  }
+
   // The seat to play finds its ball touching another (UMB): it may play away or have the balls
   // set up as for the opening.
   static void OfferTouching(const TableModel& model, const TableState& balls, Judgement* j) {
@@ -182,10 +189,8 @@ class ThreeCushion final : public Referee {
     if (st.match_over() || j->verdict.frame_over) return;
     const int own = balls.Find(ThreeCushionBall(st.to_play));
     if (own < 0) return;
-    for (size_t i = 0; i < balls.balls.size(); ++i) {
-      if (static_cast<int>(i) == own) continue;
-      const double d = (balls.balls[i].r - balls.balls[own].r).head<2>().norm();
-      if (d <= 2.0 * model.radius() + kTouchingGapM) {
+    for (int i = 0; i < static_cast<int>(balls.balls.size()); ++i) {
+      if (i != own && Touching(model, balls, i, own)) {
         st.decision = Decision{.seat = st.to_play, .choices = {"play", "reset"}};
         j->events.push_back({.kind = GameEventKind::kDecision, .seat = st.to_play,
                              .choices = st.decision.choices});
@@ -203,8 +208,7 @@ class ThreeCushion final : public Referee {
     if (f.struck < 0 || f.first_contacts.empty()) return false;
     if (f.CushionHitsBefore(f.struck, f.first_contact_t_s) > 0) return false;
     for (int b : f.first_contacts) {
-      const double d = (before.balls[b].r - before.balls[f.struck].r).head<2>().norm();
-      if (d <= 2.0 * model.radius() + kTouchingGapM) return true;
+      if (Touching(model, before, b, f.struck)) return true;
     }
     return false;
   }

@@ -198,10 +198,10 @@ TEST(EightBall, KitchenCueBallMustCrossTheString) {
   EXPECT_FALSE(ok.verdict.foul) << ok.verdict.reason;
   // A long rail: its segment from the head corner to the side pocket spans the string, so the
   // place of the hit decides. Beyond the string: crossed, legal; behind it: a foul.
+  const double string_x = PoolTableMarks(u.model).head_string_x;
   int side = -1;
   for (size_t i = 0; i < u.model.spec().cushions.size(); ++i) {
     const billiards::CushionSegment& c = u.model.spec().cushions[i];
-    const double string_x = PoolTableMarks(u.model).head_string_x;
     if (std::min(c.a.x(), c.b.x()) < string_x && std::max(c.a.x(), c.b.x()) > string_x &&
         c.a.y() == c.b.y()) {
       side = static_cast<int>(i);
@@ -209,7 +209,6 @@ TEST(EightBall, KitchenCueBallMustCrossTheString) {
   }
   ASSERT_GE(side, 0);
   const double rail_y = u.model.spec().cushions[side].a.y();
-  const double string_x = PoolTableMarks(u.model).head_string_x;
   for (const double dx : {0.2, -0.2}) {
     Table w = MakeTable(GameKind::kEightBall, {{"cue", -1.0, 0}, {"3", -0.8, 0.2}, {"8", 0.6, -0.2}, {"12", 0.3, 0.4}});
     w.state.ball_in_hand = BallInHand::kKitchen;
