@@ -244,9 +244,10 @@ std::vector<CommandSpec> MakeSpecs() {
        {{"token", "the seat to play's token"}, {"seat", "the seat to play next"}}},
       {"table", "decide", "ID --token T --choice CHOICE", "answer a ruled game's pending decision",
        {{"token", "the deciding seat's token"}, {"choice"}}},
-      {"table", "concede", "ID --token T", "concede the frame",
+      {"table", "concede", "ID --token T [--seat N] [--frame N]", "concede the frame",
        {{"token", "a seat's token (it concedes), or the admin token with --seat"},
-        {"seat", "with the admin token: the seat that concedes"}}},
+        {"seat", "with the admin token: the seat that concedes"},
+        {"frame", "the frame conceded (default: the table's frame, read first)"}}},
       {"table", "record", "ID", "a ruled game's match record", NoFlags()},
       {"table", "watch", "ID", "the table's snapshots as they come",
        {{"rate", "snapshots per second at most while balls move, [0, 1000] (default 30); 0, "

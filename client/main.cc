@@ -83,7 +83,7 @@ Commands:
   table shoot ID --token T [strike flags of shot simulate] [--next-seat N]
       [--call BALL:POCKET | --safety] [--push-out] [--nominate BALL]
   table decide ID --token T --choice CHOICE   answer a pending decision (ruled games)
-  table concede ID --token T [--seat N]       concede the frame (admin token: for seat N)
+  table concede ID --token T [--seat N] [--frame N]  concede the frame once (admin: for seat N)
   table record ID                             the match record, one line per action
   table place ID --token T --ball ID@X,Y   ball in hand (the seat to play, balls at rest)
   table turn ID --token T --seat N | table reset ID --token T | table delete ID --token T

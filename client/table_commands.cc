@@ -33,6 +33,8 @@ ABSL_FLAG(double, tick_hz, 0.0, "table/swing create: ticks per second (table def
 ABSL_FLAG(std::string, token, "", "The seat's token (table/swing create printed it)");
 ABSL_FLAG(std::optional<int>, next_seat, std::nullopt, "table shoot: pass the turn to this seat");
 ABSL_FLAG(std::optional<int>, seat, std::nullopt, "table turn: the seat to play next");
+ABSL_FLAG(std::optional<int>, frame, std::nullopt,
+          "table concede: the frame conceded (default: the table's frame, read first)");
 ABSL_FLAG(std::optional<double>, rate, std::nullopt,
           "table/swing watch, swing drive: snapshots per second at most (0, or above the tick "
           "rate: every tick); default 30 for tables, every tick for swings");
@@ -360,7 +362,7 @@ int RunDecide(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
 }
 
 int RunConcede(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
-  if (args.size() != 1) return UsageError("table concede ID --token T [--seat N]");
+  if (args.size() != 1) return UsageError("table concede ID --token T [--seat N] [--frame N]");
   v1::ConcedeRequest request;
   request.set_table_id(args[0]);
   request.set_token(absl::GetFlag(FLAGS_token));
@@ -370,6 +372,19 @@ int RunConcede(const Context& ctx, Stub& stub, const std::vector<std::string>& a
   if (const auto seat = absl::GetFlag(FLAGS_seat)) {
     if (*seat < 0) return UsageError(InvalidValue("--seat must be a seat number"));
     request.set_seat(static_cast<uint32_t>(*seat));
+  }
+  // The concession names its frame, so that repeating the command (or running it twice at
+  // once) concedes that frame once, never the next one too.
+  if (const auto frame = absl::GetFlag(FLAGS_frame)) {
+    if (*frame < 1) return UsageError(InvalidValue("--frame must be a frame number, from 1"));
+    request.set_frame(static_cast<uint32_t>(*frame));
+  } else {
+    v1::GetTableRequest get;
+    get.set_table_id(args[0]);
+    v1::TableInfo info;
+    const grpc::Status got = stub.GetTable(ctx.NewCall().get(), get, &info);
+    if (!got.ok()) return ReportRpcError(got);
+    if (info.has_game()) request.set_frame(info.game().frame());
   }
   v1::ConcedeResponse r;
   const grpc::Status status = stub.Concede(ctx.NewCall().get(), request, &r);

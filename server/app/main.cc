@@ -76,6 +76,29 @@ ABSL_FLAG(std::vector<std::string>, http_cors_origins, {},
           "Origins allowed to call gRPC-Web from another origin (comma-separated; * for any)");
 ABSL_FLAG(int, http_max_streams_per_client, 4,
           "Open gRPC-Web server streams per client address");
+ABSL_FLAG(int, http_max_streams, 2048, "Open gRPC-Web server streams in all");
+ABSL_FLAG(int, http_max_connections, 4096,
+          "Open connections to the gRPC-Web port in all (more get 503 or are not accepted)");
+ABSL_FLAG(int, http_max_connections_per_client, 64,
+          "Open connections to the gRPC-Web port per client address (more get 429)");
+ABSL_FLAG(int, http_max_calls_per_client, 16,
+          "gRPC-Web unary calls in flight per client address (more get RESOURCE_EXHAUSTED)");
+ABSL_FLAG(Seconds, http_idle_timeout, Seconds{absl::Seconds(30)},
+          "A gRPC-Web connection with no bytes either way this long is closed (a waiting call "
+          "or stream is not idle)");
+ABSL_FLAG(Seconds, http_header_timeout, Seconds{absl::Seconds(10)},
+          "A request's head must arrive within this of the connection's opening or of the "
+          "previous response; slower clients are closed");
+ABSL_FLAG(Seconds, http_body_timeout, Seconds{absl::Seconds(10)},
+          "A request's body must arrive within this of its head");
+ABSL_FLAG(Seconds, http_call_deadline, Seconds{absl::Seconds(60)},
+          "The longest a gRPC-Web unary call may take (a shorter grpc-timeout wins)");
+ABSL_FLAG(int, http_threads, 2, "Threads polling the gRPC-Web port's connections");
+ABSL_FLAG(int64_t, stream_window_bytes, 1 << 20,
+          "Finished, unsent work a server stream may hold per call (SimulateShots computes ahead "
+          "of its reader only this far; gRPC-Web streams stop reading past it)");
+ABSL_FLAG(Seconds, stream_stall_timeout, Seconds{absl::Seconds(30)},
+          "A SimulateShots stream whose client reads nothing this long is stopped (0: never)");
 ABSL_FLAG(int, sim_workers, 0,
           "Threads computing simulations (SimulateShot, SimulateSwing, SimulateFlight, "
           "StartSwing), apart from gRPC's and the tick workers, at a lower priority; 0: one "
@@ -165,6 +188,38 @@ int main(int argc, char** argv) {
   config.web_root = absl::GetFlag(FLAGS_web_root);
   config.http_cors_origins = absl::GetFlag(FLAGS_http_cors_origins);
   config.http_max_streams_per_client = absl::GetFlag(FLAGS_http_max_streams_per_client);
+  config.http.max_streams = absl::GetFlag(FLAGS_http_max_streams);
+  config.http.max_connections = absl::GetFlag(FLAGS_http_max_connections);
+  config.http.max_connections_per_client = absl::GetFlag(FLAGS_http_max_connections_per_client);
+  config.http.max_calls_per_client = absl::GetFlag(FLAGS_http_max_calls_per_client);
+  config.http.idle_timeout = absl::GetFlag(FLAGS_http_idle_timeout).d;
+  config.http.header_timeout = absl::GetFlag(FLAGS_http_header_timeout).d;
+  config.http.body_timeout = absl::GetFlag(FLAGS_http_body_timeout).d;
+  config.http.call_deadline = absl::GetFlag(FLAGS_http_call_deadline).d;
+  config.http.threads = absl::GetFlag(FLAGS_http_threads);
+  config.streams.window_bytes = absl::GetFlag(FLAGS_stream_window_bytes);
+  config.streams.stall_timeout = absl::GetFlag(FLAGS_stream_stall_timeout).d;
+  if (config.streams.window_bytes < (16 << 10) || config.streams.window_bytes > (int64_t{1} << 30)) {
+    std::cerr << "sportsim-server: --stream_window_bytes must be in [16384, 1073741824], got "
+              << config.streams.window_bytes << "\n";
+    return 2;
+  }
+  const struct {
+    const char* name;
+    absl::Duration value, lo, hi;
+  } durations[] = {{"http_idle_timeout", config.http.idle_timeout, absl::Seconds(1), absl::Hours(24)},
+                   {"http_header_timeout", config.http.header_timeout, absl::Milliseconds(100), absl::Hours(1)},
+                   {"http_body_timeout", config.http.body_timeout, absl::Milliseconds(100), absl::Hours(1)},
+                   {"http_call_deadline", config.http.call_deadline, absl::Milliseconds(100), absl::Hours(24)},
+                   {"stream_stall_timeout", config.streams.stall_timeout, absl::ZeroDuration(), absl::Hours(24)}};
+  for (const auto& d : durations) {
+    if (d.value < d.lo || d.value > d.hi) {
+      std::cerr << "sportsim-server: --" << d.name << " must be in [" << absl::FormatDuration(d.lo)
+                << ", " << absl::FormatDuration(d.hi) << "], got " << absl::FormatDuration(d.value)
+                << "\n";
+      return 2;
+    }
+  }
   config.work.workers = absl::GetFlag(FLAGS_sim_workers);
   config.work.max_queued = absl::GetFlag(FLAGS_max_queued_simulations);
   config.work.cpu_budget = absl::GetFlag(FLAGS_max_request_cpu).d;
@@ -185,6 +240,11 @@ int main(int argc, char** argv) {
                 {"tick_workers", config.tick_workers, 0, 256},
                 {"sim_workers", config.work.workers, 0, 256},
                 {"http_max_streams_per_client", config.http_max_streams_per_client, 1, 64},
+                {"http_max_streams", config.http.max_streams, 1, 100000},
+                {"http_max_connections", config.http.max_connections, 1, 100000},
+                {"http_max_connections_per_client", config.http.max_connections_per_client, 1, 100000},
+                {"http_max_calls_per_client", config.http.max_calls_per_client, 1, 10000},
+                {"http_threads", config.http.threads, 1, 64},
                 {"max_queued_simulations", config.work.max_queued, 0, 100000},
                 {"max_catchup_ticks", config.tables.world.max_catchup_ticks, 1, 100000},
                 {"event_log", config.tables.world.event_log, 1, 10000000},

@@ -41,7 +41,12 @@ namespace {
 class CountingInterceptor final : public grpc::experimental::Interceptor {
  public:
   CountingInterceptor(RpcCounters* counters, const char* method)
-      : counters_(counters), method_(method != nullptr ? method : "unknown") {}
+      : counters_(counters), method_(method != nullptr ? method : "unknown") {
+    counters_->Begin();
+  }
+  ~CountingInterceptor() override { counters_->End(); }
+  CountingInterceptor(const CountingInterceptor&) = delete;
+  CountingInterceptor& operator=(const CountingInterceptor&) = delete;
   void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
     if (methods->QueryInterceptionHookPoint(
             grpc::experimental::InterceptionHookPoints::PRE_SEND_STATUS)) {

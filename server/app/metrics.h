@@ -34,13 +34,18 @@ class SessionRegistry;
 class TickScheduler;
 class WorkPool;
 
-/// RPCs finished, by full method name and gRPC status code. Thread safe.
+/// RPCs finished, by full method name and gRPC status code, and RPCs in flight. Thread safe.
 class RpcCounters {
  public:
   void Count(const std::string& method, int code);
   std::map<std::pair<std::string, int>, int64_t> Snapshot() const;
+  /// Calls that have started and not yet been destroyed.
+  int64_t in_flight() const { return in_flight_.load(std::memory_order_acquire); }
+  void Begin() { in_flight_.fetch_add(1, std::memory_order_acq_rel); }
+  void End() { in_flight_.fetch_sub(1, std::memory_order_acq_rel); }
 
  private:
+  std::atomic<int64_t> in_flight_{0};
   mutable absl::Mutex mu_;
   std::map<std::pair<std::string, int>, int64_t> counts_ ABSL_GUARDED_BY(mu_);
 };

@@ -13,14 +13,17 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <thread>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpc/grpc.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 
 #include "absl/status/status.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "absl/synchronization/notification.h"
 #include "server/rpc/services.h"
 
 namespace sportsim::server {
@@ -181,7 +184,8 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->services_.push_back(MakeSwingService(app->sessions_.get(), app->pool_.get()));
   app->services_.push_back(MakeBilliardsService(app->tables_.get(), app->pool_.get(),
                                                 config.max_send_message_bytes,
-                                                absl::ToDoubleSeconds(config.work.cpu_budget)));
+                                                absl::ToDoubleSeconds(config.work.cpu_budget),
+                                                config.streams));
 
   app->rpc_counters_ = std::make_unique<RpcCounters>();
   if (!config.metrics_listen.empty()) {
@@ -224,12 +228,22 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
     grpc::ChannelArguments args;
     args.SetMaxReceiveMessageSize(config.max_send_message_bytes);
     args.SetMaxSendMessageSize(config.max_receive_message_bytes);
+    absl::StatusOr<ListenAddress> http_address = ParseListenAddress(config.http_listen);
+    if (!http_address.ok()) {
+      app->server_->Shutdown();
+      return absl::InvalidArgumentError(absl::StrCat(
+          "--http_listen: ", http_address.status().message()));
+    }
     absl::StatusOr<std::unique_ptr<GrpcWebGateway>> web = GrpcWebGateway::Start(
         GrpcWebConfig{.listen = config.http_listen,
+                      .host = http_address->host,
+                      .port = http_address->port,
                       .web_root = config.web_root,
                       .cors_origins = config.http_cors_origins,
                       .max_request_bytes = config.max_receive_message_bytes,
-                      .max_streams_per_client = config.http_max_streams_per_client},
+                      .max_streams_per_client = config.http_max_streams_per_client,
+                      .limits = config.http,
+                      .window_bytes = config.streams.window_bytes},
         app->server_->InProcessChannel(args));
     if (!web.ok()) {
       app->server_->Shutdown();
@@ -347,7 +361,18 @@ void ServerApp::Shutdown(absl::Duration grace) {
   // next poll. Then the calls still open get what is left of the grace.
   const absl::Time deadline = absl::Now() + grace;
   pool_->Stop(grace);
+  // gRPC's shutdown waits for every connection to close, idle ones too (a client that keeps its
+  // channel open would hold the whole grace). Once no call is in flight, cancel-all closes the
+  // connections; it is repeated while shutdown runs, for a connection that raced in.
+  absl::Notification done;
+  std::thread closer([this, &done] {
+    while (!done.WaitForNotificationWithTimeout(absl::Milliseconds(20))) {
+      if (rpc_counters_->in_flight() == 0) grpc_server_cancel_all_calls(server_->c_server());
+    }
+  });
   server_->Shutdown(absl::ToChronoTime(std::max(deadline, absl::Now())));
+  done.Notify();
+  closer.join();
 }
 
 void ServerApp::Wait() {

@@ -14,6 +14,7 @@
 #include "absl/time/time.h"
 #include "server/app/metrics.h"
 #include "server/rpc/grpc_web.h"
+#include "server/rpc/services.h"
 #include "server/store/store.h"
 #include "server/swing/session_world.h"
 #include "server/world/work_pool.h"
@@ -50,6 +51,8 @@ struct ServerConfig {
   std::string web_root = kDefaultWebRoot;
   std::vector<std::string> http_cors_origins;
   int http_max_streams_per_client = 4;
+  GrpcWebLimits http;  ///< the web port's connection limits and timeouts (--http_*)
+  StreamLimits streams;  ///< --stream_window_bytes, --stream_stall_timeout
   WorkLimits work;  ///< the simulation pool (--sim_workers, --max_queued_simulations,
                     ///< --max_request_cpu)
   /// The journal (--data_dir, --store, --node, --lease): none when both data_dir and
@@ -92,6 +95,8 @@ class ServerApp {
   int port() const { return port_; }
   /// The gRPC-Web port, or 0 when off.
   int http_port() const;
+  /// The gRPC-Web gateway, or null when off.
+  GrpcWebGateway* web() { return web_.get(); }
   /// The /metrics port, or 0 when metrics are off.
   int metrics_port() const;
   TableRegistry& tables() { return *tables_; }

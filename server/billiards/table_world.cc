@@ -1007,6 +1007,12 @@ absl::StatusOr<v1::ConcedeResponse> TableRegistry::ConcedeOn(Table& t, int seat,
   if (t.game.match_over()) {
     return absl::FailedPreconditionError("the match is over: nothing left to concede");
   }
+  if (request.has_frame() && static_cast<int64_t>(request.frame()) != t.game.frame) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "frame: the concession names frame %u, but the match is on frame %d (a frame is "
+        "conceded once)",
+        request.frame(), t.game.frame));
+  }
   b::TableState balls = t.rest;
   absl::StatusOr<games::Judgement> j =
       t.game_referee->Concede(t.rules, *t.model, t.game, conceding, &balls);

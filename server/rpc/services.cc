@@ -1,6 +1,7 @@
 #include "server/rpc/services.h"
 
 #include <google/protobuf/stubs/common.h>
+#include <grpcpp/alarm.h>
 #include <grpcpp/grpcpp.h>
 
 #include <atomic>
@@ -341,17 +342,23 @@ class SwingService final : public v1::Swing::CallbackService {
   }
 };
 
-// SimulateShots: a batch's outcomes computed in chunks on the simulation pool (every core),
-// streamed in request order, one chunk a message. At most a few chunks wait or run at once,
-// so memory stays bounded whatever the batch's size; the batch's CPU (all chunks together) is
-// held to --max_request_cpu; cancellation and the deadline stop the chunks at their next poll.
-// The stream is finished only once no chunk is running and no write is in flight, so nothing
-// touches the reactor after it is done.
+// SimulateShots: a batch's outcomes computed in chunks on the pool's batch workers (every
+// core, below interactive work), streamed in request order, one chunk a message. The batch
+// computes ahead of its reader only within a window: at most a few chunks queued, running or
+// finished and unsent, and at most limits.window_bytes of finished unsent outcomes, so a client
+// that reads slowly or not at all holds a few kilobytes of the server's memory, not gigabytes,
+// and no CPU while it does not read. A write that makes no progress for limits.stall_timeout
+// (the client reads nothing) ends the call. The batch's CPU (all chunks together) is held to
+// --max_request_cpu; cancellation and the deadline stop the chunks at their next poll. The
+// stream is finished only once no chunk is running, no write is in flight and the stall alarm
+// is idle, so nothing touches the reactor after it is done.
 class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResponse> {
  public:
   BatchReactor(WorkPool* pool, grpc::CallbackServerContext* ctx,
-               const v1::SimulateShotsRequest& request, double cpu_budget_s)
-      : pool_(pool), ctx_(ctx), cpu_budget_s_(cpu_budget_s) {
+               const v1::SimulateShotsRequest& request, double cpu_budget_s,
+               const StreamLimits& limits)
+      : pool_(pool), ctx_(ctx), cpu_budget_s_(cpu_budget_s), limits_(limits),
+        owner_(pool->NewOwner()) {
     absl::StatusOr<BatchJob> job = BatchJobFromProto(request);
     if (!job.ok()) {
       Finish(ToGrpcStatus(job.status()));
@@ -370,50 +377,64 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
   }
 
   void OnWriteDone(bool ok) override {
-    std::optional<grpc::Status> finish;
-    {
-      absl::MutexLock lock(&mu_);
+    Step([&] {
       writing_ = false;
+      ++writes_done_;
       if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
-      finish = Pump();
-    }
-    if (finish.has_value()) Finish(*finish);
+    });
   }
   void OnCancel() override {
-    std::optional<grpc::Status> finish;
-    {
-      absl::MutexLock lock(&mu_);
+    Step([&] {
       if (error_.ok()) error_ = absl::CancelledError("the call was cancelled");
-      finish = Pump();
-    }
-    if (finish.has_value()) Finish(*finish);
+    });
   }
   void OnDone() override { delete this; }
 
  private:
-  // Submits chunks while few are outstanding, writes the next chunk in order when it is
+  // Runs `f` under mu_, pumps, then (without the lock) does what the pump asked for: cancel
+  // the stall alarm, cancel the call, finish. Nothing touches the reactor after Finish.
+  template <typename F>
+  void Step(F f) {
+    std::optional<grpc::Status> finish;
+    bool cancel_alarm = false;
+    bool cancel_call = false;
+    {
+      absl::MutexLock lock(&mu_);
+      f();
+      finish = Pump();
+      cancel_alarm = std::exchange(cancel_alarm_, false);
+      cancel_call = std::exchange(cancel_call_, false);
+    }
+    if (cancel_alarm) alarm_->Cancel();  // its callback (not fired) comes back through Step
+    if (cancel_call) ctx_->TryCancel();  // the stuck write completes, not ok
+    if (finish.has_value()) Finish(*finish);
+  }
+
+  // Chunks queued, running, or finished and not yet written.
+  int64_t Ahead() const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    return outstanding_ + static_cast<int64_t>(ready_.size());
+  }
+
+  // Submits chunks while the window has room, writes the next chunk in order when it is
   // ready, and says when to finish: when all is written (or on an error once nothing runs).
   // The caller finishes after releasing mu_ and touches nothing after that (OnDone may delete
   // the reactor at once, on another thread).
   std::optional<grpc::Status> Pump() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
     if (finished_) return std::nullopt;
-    while (error_.ok() && next_submit_ < chunks_ &&
-           outstanding_ < std::max(2, 2 * pool_->workers())) {
+    const int64_t window_chunks = std::max(2, 2 * pool_->batch_workers());
+    while (error_.ok() && next_submit_ < chunks_ && Ahead() < window_chunks &&
+           ready_bytes_ < limits_.window_bytes) {
       const int64_t c = next_submit_++;
       ++outstanding_;
       absl::Status queued = pool_->Submit(
           [this, c](const WorkControl& control) { Run(c, control); },
           [this](const absl::Status& dropped) {
-            std::optional<grpc::Status> finish;
-            {
-              absl::MutexLock lock(&mu_);
+            Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
               --outstanding_;
               if (error_.ok()) error_ = dropped;
-              finish = Pump();
-            }
-            if (finish.has_value()) Finish(*finish);
+            });
           },
-          [this] { return ctx_->IsCancelled(); }, DeadlineOf(ctx_));
+          [this] { return ctx_->IsCancelled(); }, DeadlineOf(ctx_), WorkClass::kBatch, owner_);
       if (!queued.ok()) {
         --outstanding_;
         error_ = queued;
@@ -422,20 +443,59 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
     if (!writing_ && error_.ok()) {
       auto it = ready_.find(next_write_);
       if (it != ready_.end()) {
-        out_ = std::move(it->second);
+        out_ = std::move(it->second.response);
+        ready_bytes_ -= it->second.bytes;
         ready_.erase(it);
         ++next_write_;
         writing_ = true;
+        ArmStallAlarm();
         StartWrite(&out_);
         return std::nullopt;
       }
     }
+    // Nothing finished and unsent is kept once the batch has failed.
+    if (!error_.ok() && !ready_.empty()) {
+      ready_.clear();
+      ready_bytes_ = 0;
+    }
     const bool all_written = next_write_ == chunks_;
-    if (!writing_ && outstanding_ == 0 && (all_written || !error_.ok())) {
+    const bool done = !writing_ && outstanding_ == 0 && (all_written || !error_.ok());
+    if (done && alarm_pending_ && !alarm_cancelled_) {
+      alarm_cancelled_ = true;
+      cancel_alarm_ = true;
+    }
+    if (done && !alarm_pending_) {
       finished_ = true;
       return ToGrpcStatus(error_);
     }
     return std::nullopt;
+  }
+
+  // The stall alarm: while a write is in flight, it checks every stall_timeout that some
+  // write completed since it was set; if none did, the reader has stalled and the call ends.
+  void ArmStallAlarm() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (alarm_pending_ || limits_.stall_timeout <= absl::ZeroDuration()) return;
+    alarm_pending_ = true;
+    alarm_cancelled_ = false;
+    alarm_writes_ = writes_done_;
+    // A fresh alarm each time (the one that fired may be the caller, still running).
+    alarm_ = std::make_unique<grpc::Alarm>();
+    alarm_->Set(absl::ToChronoTime(absl::Now() + limits_.stall_timeout),
+                [this](bool fired) { OnStallAlarm(fired); });
+  }
+  void OnStallAlarm(bool fired) {
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      alarm_pending_ = false;
+      if (!fired || !error_.ok() || !writing_) return;
+      if (writes_done_ == alarm_writes_) {
+        error_ = absl::ResourceExhaustedError(absl::StrFormat(
+            "the client read nothing for %s (--stream_stall_timeout): the batch was stopped",
+            absl::FormatDuration(limits_.stall_timeout)));
+        cancel_call_ = true;
+      } else {
+        ArmStallAlarm();
+      }
+    });
   }
 
   // One chunk on a worker: outcomes [c * chunk_, ...), each polling the call and the batch's
@@ -485,19 +545,17 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
       counted_so_far = counted;
     }
     const double used = control.CpuSeconds() - cpu0 - counted;
-    std::optional<grpc::Status> finish;
-    {
-      absl::MutexLock lock(&mu_);
+    const int64_t bytes = static_cast<int64_t>(response.ByteSizeLong());
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
       AddCpu(used);
       --outstanding_;
       if (!stopped.ok()) {
         if (error_.ok()) error_ = stopped;
-      } else {
-        ready_.emplace(c, std::move(response));
+      } else if (error_.ok()) {
+        ready_bytes_ += bytes;
+        ready_.emplace(c, Ready{std::move(response), bytes});
       }
-      finish = Pump();
-    }
-    if (finish.has_value()) Finish(*finish);
+    });
   }
 
   void AddCpu(double s) {
@@ -506,9 +564,16 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
     }
   }
 
+  struct Ready {
+    v1::SimulateShotsResponse response;
+    int64_t bytes = 0;
+  };
+
   WorkPool* const pool_;
   grpc::CallbackServerContext* const ctx_;
   const double cpu_budget_s_;
+  const StreamLimits limits_;
+  const uint64_t owner_;
   std::shared_ptr<const BatchJob> job_;
   int64_t chunk_ = 1;
   int64_t chunks_ = 0;
@@ -516,26 +581,35 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
   absl::Mutex mu_;
   int64_t next_submit_ ABSL_GUARDED_BY(mu_) = 0;
   int64_t next_write_ ABSL_GUARDED_BY(mu_) = 0;
-  int outstanding_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t outstanding_ ABSL_GUARDED_BY(mu_) = 0;
   bool writing_ ABSL_GUARDED_BY(mu_) = false;
   bool finished_ ABSL_GUARDED_BY(mu_) = false;
   absl::Status error_ ABSL_GUARDED_BY(mu_);
-  std::map<int64_t, v1::SimulateShotsResponse> ready_ ABSL_GUARDED_BY(mu_);
+  std::map<int64_t, Ready> ready_ ABSL_GUARDED_BY(mu_);
+  int64_t ready_bytes_ ABSL_GUARDED_BY(mu_) = 0;
+  int64_t writes_done_ ABSL_GUARDED_BY(mu_) = 0;
+  std::unique_ptr<grpc::Alarm> alarm_;  // set and cancelled as Step and ArmStallAlarm say
+  bool alarm_pending_ ABSL_GUARDED_BY(mu_) = false;
+  bool alarm_cancelled_ ABSL_GUARDED_BY(mu_) = false;
+  bool cancel_alarm_ ABSL_GUARDED_BY(mu_) = false;
+  bool cancel_call_ ABSL_GUARDED_BY(mu_) = false;
+  int64_t alarm_writes_ ABSL_GUARDED_BY(mu_) = 0;
   v1::SimulateShotsResponse out_;  // the message being written
 };
 
 class BilliardsService final : public v1::Billiards::CallbackService {
  public:
   BilliardsService(TableRegistry* tables, WorkPool* pool, int64_t max_reply_bytes,
-                   double cpu_budget_s)
+                   double cpu_budget_s, StreamLimits streams)
       : tables_(tables), pool_(pool), max_reply_bytes_(max_reply_bytes),
-        cpu_budget_s_(cpu_budget_s) {}
+        cpu_budget_s_(cpu_budget_s), streams_(streams) {}
 
  private:
   TableRegistry* const tables_;
   WorkPool* const pool_;
   const int64_t max_reply_bytes_;
   const double cpu_budget_s_;
+  const StreamLimits streams_;
 
   grpc::ServerUnaryReactor* CreateTable(grpc::CallbackServerContext* ctx,
                                         const v1::CreateTableRequest* request,
@@ -582,7 +656,7 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   }
   grpc::ServerWriteReactor<v1::SimulateShotsResponse>* SimulateShots(
       grpc::CallbackServerContext* ctx, const v1::SimulateShotsRequest* request) override {
-    return new BatchReactor(pool_, ctx, *request, cpu_budget_s_);
+    return new BatchReactor(pool_, ctx, *request, cpu_budget_s_, streams_);
   }
   grpc::ServerUnaryReactor* PreviewShot(grpc::CallbackServerContext* ctx,
                                         const v1::PreviewShotRequest* request,
@@ -677,8 +751,10 @@ std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkP
 }
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
                                                     int64_t max_reply_bytes,
-                                                    double cpu_budget_s) {
-  return std::make_unique<BilliardsService>(tables, pool, max_reply_bytes, cpu_budget_s);
+                                                    double cpu_budget_s,
+                                                    StreamLimits streams) {
+  return std::make_unique<BilliardsService>(tables, pool, max_reply_bytes, cpu_budget_s,
+                                            streams);
 }
 
 }  // namespace sportsim::server

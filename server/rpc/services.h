@@ -7,6 +7,7 @@
 
 #include <grpcpp/impl/codegen/service_type.h>
 
+#include "absl/time/time.h"
 #include "sportsim/v1/common.pb.h"
 
 namespace sportsim::server {
@@ -14,6 +15,13 @@ namespace sportsim::server {
 class SessionRegistry;
 class TableRegistry;
 class WorkPool;
+
+/// Per-call bounds of server streams that compute ahead of their reader (SimulateShots).
+struct StreamLimits {
+  int64_t window_bytes = 1 << 20;  ///< finished, unsent work per call (--stream_window_bytes)
+  /// A write that makes no progress this long ends the call (--stream_stall_timeout; 0: never).
+  absl::Duration stall_timeout = absl::Seconds(30);
+};
 
 /// The capabilities this build serves (also used by tests).
 v1::GetInfoResponse MakeServerInfo();
@@ -25,7 +33,8 @@ std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkP
 /// Billiards: SimulateShot (on `pool`) and the tables of `tables`. Both must outlive it.
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
                                                     int64_t max_reply_bytes,
-                                                    double cpu_budget_s);
+                                                    double cpu_budget_s,
+                                                    StreamLimits streams = {});
 
 }  // namespace sportsim::server
 

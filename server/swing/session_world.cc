@@ -761,10 +761,12 @@ void SessionRegistry::Refuse(Drive& drive, const absl::Status& why,
     e.set_code(static_cast<int32_t>(why.code()));
     e.set_reason(std::string(why.message()));
     e.set_seat(static_cast<uint32_t>(drive.seat));
+    // The command's values are echoed only where finite: a NaN or an infinity is named in the
+    // reason, never sent back as a number.
     if (command != nullptr) {
-      e.set_command_t_s(command->t_s());
-      e.set_qalpha_nm(command->qalpha_nm());
-      e.set_qbeta_nm(command->qbeta_nm());
+      if (std::isfinite(command->t_s())) e.set_command_t_s(command->t_s());
+      if (std::isfinite(command->qalpha_nm())) e.set_qalpha_nm(command->qalpha_nm());
+      if (std::isfinite(command->qbeta_nm())) e.set_qbeta_nm(command->qbeta_nm());
     }
     counters_.Refused(why.code());
     pump = drive.watcher->Offer(nullptr, {std::make_shared<const v1::SwingEvent>(std::move(e))});

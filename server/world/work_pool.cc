@@ -53,31 +53,71 @@ absl::Status WorkControl::Check() const {
 }
 
 WorkPool::WorkPool(WorkLimits limits) : limits_(limits) {
-  int n = limits_.workers;
-  if (n <= 0) n = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  for (int i = 0; i < n; ++i) threads_.emplace_back([this] { Loop(); });
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  interactive_workers_ = limits_.workers > 0 ? limits_.workers : cores;
+  const int batch = limits_.batch_workers > 0 ? limits_.batch_workers : interactive_workers_;
+  for (int i = 0; i < interactive_workers_; ++i) {
+    threads_.emplace_back([this] { Loop(WorkClass::kInteractive); });
+  }
+  for (int i = 0; i < batch; ++i) threads_.emplace_back([this] { Loop(WorkClass::kBatch); });
 }
 
 WorkPool::~WorkPool() { Stop(absl::ZeroDuration()); }
 
 absl::Status WorkPool::Submit(Job job, Dropped dropped, std::function<bool()> cancelled,
-                              std::optional<WorkControl::Clock::time_point> deadline) {
+                              std::optional<WorkControl::Clock::time_point> deadline,
+                              WorkClass cls, uint64_t owner) {
   absl::MutexLock lock(&mu_);
   if (stopping_) return absl::UnavailableError("the server is shutting down");
-  if (static_cast<int>(queue_.size()) >= limits_.max_queued) {
+  const int waiting = cls == WorkClass::kBatch ? batch_queued_ : static_cast<int>(queue_.size());
+  if (waiting >= limits_.max_queued) {
     refused_.fetch_add(1);
     return absl::ResourceExhaustedError(absl::StrFormat(
-        "the server's simulation queue is full (%d waiting, %d running): retry later",
-        queue_.size(), running_.load()));
+        "the server's %s queue is full (%d waiting, %d running): retry later",
+        cls == WorkClass::kBatch ? "batch" : "simulation", waiting, running_.load()));
   }
-  queue_.push_back(Pending{std::move(job), std::move(dropped), std::move(cancelled), deadline});
-  cv_.Signal();
+  Pending p{std::move(job), std::move(dropped), std::move(cancelled), deadline};
+  if (cls == WorkClass::kInteractive) {
+    queue_.push_back(std::move(p));
+    cv_.Signal();
+  } else {
+    std::deque<Pending>& mine = batches_[owner];
+    if (mine.empty()) turns_.push_back(owner);
+    mine.push_back(std::move(p));
+    ++batch_queued_;
+    batch_cv_.Signal();
+  }
   return absl::OkStatus();
 }
 
 int WorkPool::queued() const {
   absl::MutexLock lock(&mu_);
-  return static_cast<int>(queue_.size());
+  return static_cast<int>(queue_.size()) + batch_queued_;
+}
+
+bool WorkPool::HasWork(WorkClass cls) const {
+  return cls == WorkClass::kInteractive ? !queue_.empty() : !turns_.empty();
+}
+
+WorkPool::Pending WorkPool::Take(WorkClass cls) {
+  Pending p;
+  if (cls == WorkClass::kInteractive) {
+    p = std::move(queue_.front());
+    queue_.pop_front();
+    return p;
+  }
+  const uint64_t owner = turns_.front();
+  turns_.pop_front();
+  auto it = batches_.find(owner);
+  p = std::move(it->second.front());
+  it->second.pop_front();
+  --batch_queued_;
+  if (it->second.empty()) {
+    batches_.erase(it);
+  } else {
+    turns_.push_back(owner);  // its next chunk waits for the others' turns
+  }
+  return p;
 }
 
 void WorkPool::Stop(absl::Duration grace) {
@@ -89,7 +129,14 @@ void WorkPool::Stop(absl::Duration grace) {
       stop_after_ns_.store(
           SteadyNs(WorkControl::Clock::now() + absl::ToChronoNanoseconds(grace)));
       std::swap(dropped, queue_);
+      for (const uint64_t owner : turns_) {
+        for (Pending& p : batches_[owner]) dropped.push_back(std::move(p));
+      }
+      batches_.clear();
+      turns_.clear();
+      batch_queued_ = 0;
       cv_.SignalAll();
+      batch_cv_.SignalAll();
     }
   }
   for (Pending& p : dropped) p.dropped(absl::UnavailableError("the server is shutting down"));
@@ -98,19 +145,20 @@ void WorkPool::Stop(absl::Duration grace) {
   }
 }
 
-void WorkPool::Loop() {
-  // Below the server's other threads: health, reads and ticks come first on a busy machine.
-  if (limits_.nice > 0) {
-    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), limits_.nice);
-  }
+void WorkPool::Loop(WorkClass cls) {
+  // Below the server's other threads: health, reads and ticks come first on a busy machine;
+  // batch chunks below interactive jobs.
+  const int nice =
+      cls == WorkClass::kBatch ? std::max(limits_.nice, limits_.batch_nice) : limits_.nice;
+  if (nice > 0) setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), nice);
+  absl::CondVar& cv = cls == WorkClass::kBatch ? batch_cv_ : cv_;
   for (;;) {
     Pending p;
     {
       absl::MutexLock lock(&mu_);
-      while (!stopping_ && queue_.empty()) cv_.Wait(&mu_);
-      if (stopping_) return;  // the queue was handed to Stop()
-      p = std::move(queue_.front());
-      queue_.pop_front();
+      while (!stopping_ && !HasWork(cls)) cv.Wait(&mu_);
+      if (stopping_) return;  // the queues were handed to Stop()
+      p = Take(cls);
       running_.fetch_add(1);
     }
     const WorkControl control(std::move(p.cancelled), p.deadline,

@@ -3,7 +3,15 @@
 // from the tick workers, with a bounded queue, so that no valid request can starve health
 // checks, reads or ticks. A running job polls its WorkControl between steps or events: the
 // caller's cancellation, its deadline, its CPU budget and the server's shutdown stop it.
-// Workers run at a lower scheduling priority (nice) than the rest of the server. No gRPC here.
+// Workers run at a lower scheduling priority (nice) than the rest of the server.
+//
+// Two classes of work, each with its own queue and its own workers: interactive jobs (a
+// player's SimulateShot, PreviewShot, a swing's dry run, a round's stroke) and batch chunks
+// (SimulateShots). Batch workers run at a lower priority still (batch_nice), so that on a busy
+// machine the kernel's scheduler gives an interactive job most of a core the moment it is
+// queued, instead of after the chunks ahead of it; when no interactive job waits, batches have
+// every core. Batch chunks are taken round-robin over their owners (one owner per batch call),
+// so that every batch gets a fair share and none gets all of it. No gRPC here.
 #ifndef SPORTSIM_SERVER_WORLD_WORK_POOL_H_
 #define SPORTSIM_SERVER_WORLD_WORK_POOL_H_
 
@@ -12,6 +20,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <map>
 #include <optional>
 #include <thread>
 #include <vector>
@@ -28,7 +37,12 @@ struct WorkLimits {
   int max_queued = 64;              ///< jobs waiting for a worker; more: RESOURCE_EXHAUSTED
   absl::Duration cpu_budget = absl::Seconds(10);  ///< thread CPU per request (--max_request_cpu)
   int nice = 10;                    ///< workers' niceness (0: as the server's other threads)
+  int batch_workers = 0;            ///< threads for batch chunks; 0: one per core
+  int batch_nice = 19;              ///< their niceness (kept >= nice)
 };
+
+/// Which queue a job waits in (see the file comment).
+enum class WorkClass { kInteractive, kBatch };
 
 /// What a running job polls. Thread-compatible: used by the job's own thread only.
 class WorkControl {
@@ -64,17 +78,23 @@ class WorkPool {
   WorkPool(const WorkPool&) = delete;
   WorkPool& operator=(const WorkPool&) = delete;
 
-  /// Queues a job: RESOURCE_EXHAUSTED when max_queued jobs already wait, UNAVAILABLE once
-  /// stopping. Exactly one of `job` and `dropped` is called later, on a worker or in Stop().
+  /// Queues a job: RESOURCE_EXHAUSTED when max_queued jobs of its class already wait,
+  /// UNAVAILABLE once stopping. Exactly one of `job` and `dropped` is called later, on a worker
+  /// or in Stop(). `owner` (batch jobs): the batch the job belongs to, for the round-robin.
   absl::Status Submit(Job job, Dropped dropped, std::function<bool()> cancelled,
-                      std::optional<WorkControl::Clock::time_point> deadline);
+                      std::optional<WorkControl::Clock::time_point> deadline,
+                      WorkClass cls = WorkClass::kInteractive, uint64_t owner = 0);
+  /// A fresh owner id for a batch.
+  uint64_t NewOwner() { return next_owner_.fetch_add(1) + 1; }
 
   /// Refuses new jobs, drops the queued ones (UNAVAILABLE), lets running ones go on for
   /// `grace`, then tells them to stop, and joins the workers. Idempotent.
   void Stop(absl::Duration grace);
 
-  int workers() const { return static_cast<int>(threads_.size()); }
-  int queued() const;
+  /// Interactive workers (batch workers are as many unless set apart).
+  int workers() const { return interactive_workers_; }
+  int batch_workers() const { return static_cast<int>(threads_.size()) - interactive_workers_; }
+  int queued() const;  ///< both classes
   int running() const { return running_.load(); }
   int64_t refused() const { return refused_.load(); }   ///< queue full
   int64_t budget_exhausted() const { return budget_exhausted_.load(); }
@@ -88,12 +108,20 @@ class WorkPool {
     std::function<bool()> cancelled;
     std::optional<WorkControl::Clock::time_point> deadline;
   };
-  void Loop();
+  void Loop(WorkClass cls);
+  bool HasWork(WorkClass cls) const ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
+  Pending Take(WorkClass cls) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_);
 
   const WorkLimits limits_;
+  int interactive_workers_ = 0;
   mutable absl::Mutex mu_;
-  absl::CondVar cv_;
-  std::deque<Pending> queue_ ABSL_GUARDED_BY(mu_);
+  absl::CondVar cv_, batch_cv_;
+  std::deque<Pending> queue_ ABSL_GUARDED_BY(mu_);  // interactive
+  // Batch chunks: each owner's in order, owners served in turn.
+  std::map<uint64_t, std::deque<Pending>> batches_ ABSL_GUARDED_BY(mu_);
+  std::deque<uint64_t> turns_ ABSL_GUARDED_BY(mu_);  // owners with chunks waiting
+  int batch_queued_ ABSL_GUARDED_BY(mu_) = 0;
+  std::atomic<uint64_t> next_owner_{0};
   bool stopping_ ABSL_GUARDED_BY(mu_) = false;
   std::vector<std::thread> threads_;
   std::atomic<int64_t> stop_after_ns_{0};

@@ -212,11 +212,13 @@ class Api {
     return stub_->Decide(Ctx().get(), req, &resp);
   }
   grpc::Status Concede(const std::string& id, const std::string& token,
-                       std::optional<uint32_t> seat = std::nullopt) {
+                       std::optional<uint32_t> seat = std::nullopt,
+                       std::optional<uint32_t> frame = std::nullopt) {
     v1::ConcedeRequest req;
     req.set_table_id(id);
     req.set_token(token);
     if (seat.has_value()) req.set_seat(*seat);
+    if (frame.has_value()) req.set_frame(*frame);
     v1::ConcedeResponse resp;
     return stub_->Concede(Ctx().get(), req, &resp);
   }
@@ -1587,6 +1589,44 @@ TEST_F(GamesTest, FreePlayKeepsEverySeatsRightsAndTheAdminHasThemToo) {
   ASSERT_TRUE(api_->Delete(id, t.tokens[1]).ok());
   TableHandle u = MustCreate(req);
   ASSERT_TRUE(api_->Delete(u.id, u.admin).ok());
+}
+
+// A concession names its frame: three simultaneous concessions of frame 1 concede it once, and
+// a concession of a frame not being played is refused and changes nothing.
+TEST_F(GamesTest, AFrameIsConcededOnce) {
+  TableHandle t = MustCreate(GameRequest("9ball", 3, "in-play", {{"cue", 0.3, 0.0}, {"9", 0.8, 0.25}}));
+  v1::TableInfo before = api_->Get(t.id);
+  ASSERT_EQ(before.game().frame(), 1u);
+  const uint32_t seat = before.game().to_play();
+  const grpc::Status future = api_->Concede(t.id, t.tokens[seat], std::nullopt, 2u);
+  EXPECT_EQ(future.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_THAT(future.error_message(), HasSubstr("frame"));
+  const v1::TableInfo unchanged = api_->Get(t.id);
+  EXPECT_TRUE(MessageDifferencer::Equals(before.game(), unchanged.game()))
+      << unchanged.game().ShortDebugString();
+  std::vector<grpc::Status> results(3);
+  std::vector<std::thread> threads;
+  for (int i = 0; i < 3; ++i) {
+    threads.emplace_back([&, i] { results[i] = api_->Concede(t.id, t.tokens[seat], std::nullopt, 1u); });
+  }
+  for (std::thread& th : threads) th.join();
+  int ok = 0;
+  for (const grpc::Status& r : results) {
+    if (r.ok()) {
+      ++ok;
+    } else {
+      EXPECT_EQ(r.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << r.error_message();
+    }
+  }
+  EXPECT_EQ(ok, 1);
+  const v1::TableInfo after = api_->Get(t.id);
+  EXPECT_EQ(after.game().frame(), 2u) << after.game().ShortDebugString();
+  int conceded = 0;
+  const v1::MatchRecord record = api_->Record(t.id);  // kept: the loop reads into it
+  for (const v1::MatchAction& a : record.actions()) {
+    conceded += a.kind() == v1::MatchAction::CONCEDE;
+  }
+  EXPECT_EQ(conceded, 1);
 }
 
 }  // namespace

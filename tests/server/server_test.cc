@@ -6,8 +6,13 @@
 #include <map>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <grpcpp/grpcpp.h>
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include "gmock/gmock.h"
 #include "grpc/health/v1/health.grpc.pb.h"
@@ -342,6 +347,48 @@ TEST_F(ServerTest, ShutdownLetsAnInFlightCallFinish) {
   const LongCall c = ShutdownDuringCall(5e-6, absl::Minutes(4));
   EXPECT_TRUE(c.status.ok()) << c.status.error_message();
   EXPECT_EQ(c.response.end_t_s(), 10.0);
+}
+
+// Idle connections do not hold the shutdown: gRPC waits for every connection to close, and a
+// client that keeps its channel open (or a socket that never speaks) would otherwise keep a
+// SIGTERM waiting the whole grace. The grace here is a minute; the shutdown ends in seconds.
+TEST(ServerShutdownTest, IdleConnectionsDoNotHoldTheGrace) {
+  ServerConfig config{.listen = "127.0.0.1:0", .http_listen = "127.0.0.1:0"};
+  absl::StatusOr<std::unique_ptr<ServerApp>> started = ServerApp::Start(config);
+  ASSERT_TRUE(started.ok()) << started.status();
+  std::unique_ptr<ServerApp> app = *std::move(started);
+  // Three connected channels, each idle after one call.
+  std::vector<std::shared_ptr<grpc::Channel>> channels;
+  for (int i = 0; i < 3; ++i) {
+    grpc::ChannelArguments args;
+    args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);  // a connection each
+    channels.push_back(grpc::CreateCustomChannel(app->address(),
+                                                 grpc::InsecureChannelCredentials(), args));
+    grpc::ClientContext ctx;
+    v1::GetInfoResponse info;
+    ASSERT_TRUE(v1::Server::NewStub(channels.back())->GetInfo(&ctx, {}, &info).ok());
+  }
+  // A raw socket on each port that never sends a byte.
+  std::vector<int> sockets;
+  for (int port : {app->port(), app->http_port()}) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(fd, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<uint16_t>(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr), 0);
+    sockets.push_back(fd);
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  app->Shutdown(absl::Minutes(1));
+  app->Wait();
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("shutdown with 3 idle channels and 2 silent sockets: %.3f s (grace 60 s)\n",
+              waited_s);
+  EXPECT_LT(waited_s, 20.0) << "idle connections held the shutdown's grace";
+  for (int fd : sockets) ::close(fd);
 }
 
 TEST_F(ServerTest, SimulateFlightIsBitIdenticalToTheLibrary) {
