@@ -3,6 +3,7 @@
 #define SPORTSIM_SIM_CORE_CHECK_H_
 
 #include <cmath>
+#include <initializer_list>
 #include <string_view>
 
 #include "absl/status/status.h"
@@ -20,6 +21,26 @@ inline absl::Status CheckFiniteInRange(std::string_view name, double value, doub
   return absl::InvalidArgumentError(absl::StrFormat("%s must be finite and in %c%g, %g%c, got %g",
                                                     name, lo_open ? '(' : '[', lo, hi,
                                                     hi_open ? ')' : ']', value));
+}
+
+/// One field of a CheckFieldsInRange list.
+struct FieldRange {
+  std::string_view name;
+  double value, lo;
+  bool lo_open;
+  double hi;
+  bool hi_open = false;
+};
+
+/// CheckFiniteInRange on each field in order: the first failure, or OK.
+inline absl::Status CheckFieldsInRange(std::initializer_list<FieldRange> fields) {
+  for (const FieldRange& f : fields) {
+    if (absl::Status s = CheckFiniteInRange(f.name, f.value, f.lo, f.lo_open, f.hi, f.hi_open);
+        !s.ok()) {
+      return s;
+    }
+  }
+  return absl::OkStatus();
 }
 
 }  // namespace sportsim

@@ -636,6 +636,7 @@ absl::StatusOr<FlightResult> SimulateFlight(const BallSpec& ball,
   FlightResult result;
   result.air = *air;
   result.apex_m = options.launch_height_m;
+  result.spin_axis = model.spin_axis;
   Flight flight(model, options, y0, &result);
   if (auto s = flight.Run(); !s.ok()) return s;
   return result;

@@ -149,6 +149,9 @@ struct FlightResult {
                                     ///< ground-frame velocity (deg)
   double landing_speed_mps = 0.0;   ///< ground speed at landing (m/s)
   double landing_spin_rpm = 0.0;    ///< spin rate at landing (rpm)
+  /// The spin's unit axis (world frame; fixed through the flight): the angular velocity at
+  /// landing is landing_spin_rpm * kRpmToRadPerS * spin_axis.
+  Eigen::Vector3d spin_axis = Eigen::Vector3d::Zero();
   Eigen::Vector3d landing_position_m = Eigen::Vector3d::Zero();    ///< (m)
   Eigen::Vector3d landing_velocity_mps = Eigen::Vector3d::Zero();  ///< (m/s)
   AirProperties air;                ///< the air used

@@ -1,0 +1,71 @@
+// CPU of the golf ball's ground phase per shot beside its flight's: a tour drive and a tour
+// 7-iron (flight, then bounces and roll on the normal fairway), and putts of 3 and 10 m on a
+// Stimp 10 green, flat and across a 2 % slope. Defaults throughout (RK4 at 1 ms in the air
+// and on the ground), no samples. Results: docs/golf-ground.md.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "sim/golf/ball_flight.h"
+#include "sim/golf/ground.h"
+#include "sim/golf/surface.h"
+
+namespace sportsim::golf {
+namespace {
+
+LaunchConditions Launch(int which) {
+  if (which == 0) return {.ball_speed_mps = 167 * kMphToMps, .launch_angle_deg = 10.9, .spin_rpm = 2686};
+  return {.ball_speed_mps = 120 * kMphToMps, .launch_angle_deg = 16.3, .spin_rpm = 7097};
+}
+
+FlightResult Fly(int which) {
+  FlightOptions o;
+  o.sample_interval_s = 0;
+  return *SimulateFlight(BallSpec{}, Launch(which), Atmosphere{}, Wind{}, o);
+}
+
+GroundOptions Quiet() {
+  GroundOptions o;
+  o.sample_interval_s = 0;
+  o.hole = false;
+  return o;
+}
+
+// Arg: 0 drive, 1 seven-iron.
+void BM_Flight(benchmark::State& state) {
+  for (auto _ : state) benchmark::DoNotOptimize(Fly(static_cast<int>(state.range(0))));
+}
+BENCHMARK(BM_Flight)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+void BM_GroundAfterFlight(benchmark::State& state) {
+  const FlightResult flight = Fly(static_cast<int>(state.range(0)));
+  const Surface fairway = *SurfaceByName("fairway");
+  const GroundStart start = LandingFromFlight(flight);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(SimulateGround(BallSpec{}, fairway, {}, {}, start, Quiet()));
+  }
+}
+BENCHMARK(BM_GroundAfterFlight)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
+// Args: putt length (m), slope (%).
+void BM_Putt(benchmark::State& state) {
+  const Surface green = *GreenOfStimp(10);
+  const double length = static_cast<double>(state.range(0));
+  const GroundPlane plane{.slope_pct = static_cast<double>(state.range(1)),
+                          .slope_toward_deg = -90};
+  // A speed that stops about `length` on the flat (skid, then roll).
+  const double speed = std::sqrt(2 * length * 5.0 / 7.0 * green.rolling_resistance * 9.80665);
+  GroundOptions o = Quiet();
+  o.hole = true;
+  const Hole hole{.x_m = length + 1.0, .y_m = 0};  // never reached: every putt runs to rest
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(SimulateGround(BallSpec{}, green, plane, hole,
+                                            PuttStart(0, 0, speed, 0), o));
+  }
+}
+BENCHMARK(BM_Putt)->Args({3, 0})->Args({10, 0})->Args({10, 2})->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace sportsim::golf
+
+BENCHMARK_MAIN();

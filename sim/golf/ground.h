@@ -1,0 +1,180 @@
+// The golf ball's ground phase on a plane of any tilt: from a landing (or a putt, or a ball
+// already rolling) through bounces, the skid, the roll, the hole, to rest.
+//
+// Frame: x, y horizontal, z up (metres); the plane passes through the origin and falls toward
+// the heading `slope_toward_deg` (counter-clockwise from +x) at `slope_pct` percent:
+//   z(x, y) = -(slope_pct / 100) (x cos D + y sin D).
+// Positions reported are the ball's contact point with the plane (its centre minus R times the
+// plane's unit normal n), so a ball at rest is at the plane's height.
+//
+// The model (surface.h has the laws' constants and their sources):
+// 1. Impact (Penner 2001, 2002): the turf is a rigid plane whose normal is tilted toward the
+//    incoming ball by the critical angle theta_c (Penner's law, times the surface's scale,
+//    capped so that the ball still meets the tilted plane). Against it the normal velocity
+//    reverses with restitution e(v_n) (Penner's curve, times the surface's scale, at most 1)
+//    and a tangential impulse stops the contact point's slip, as a rigid sphere leaving
+//    rolling does (Penner's assumption), but never more than bounce_friction times the normal
+//    impulse (Coulomb; then the ball leaves slipping). Spin enters through that slip: with
+//    enough backspin the tangential velocity reverses and the ball checks or spins back.
+// 2. Hops between impacts are ballistic under gravity alone (no air: hops are short and slow;
+//    the flight's aerodynamics end at the landing). An impact whose rebound leaves less normal
+//    speed than settle_speed_mps (a hop of about a millimetre), or no less than the rebound
+//    before it (a ball skipping down a slope, fed by the slope between impacts), ends the
+//    bouncing: the ball stays on the plane.
+// 3. On the plane, while the contact point slips (speed s) the ball skids under Coulomb friction
+//    mu g_n against the slip and the slope's pull g_t = gravity's component along the plane:
+//      dv/dt = g_t - mu g_n s^,   ds/dt = g_t - mu g_n (1 + 1/k) s^,   k = I / (m R^2);
+//    a spinless struck ball on the flat reaches pure roll after 2 v0 / (7 mu g), at 5/7 v0,
+//    12 v0^2 / (49 mu g) from its start (k = 2/5).
+// 4. Rolling: a resisting torque rho m g_n R and the slope's pull give
+//      dv/dt = (g_t - rho g_n v^) / (1 + k),
+//    i.e. (5/7) g sin(alpha) down the fall line and (5/7) rho g cos(alpha) against the motion
+//    for a solid sphere (Penner, "The physics of putting", Can. J. Phys. 80, 83 (2002), treats
+//    the rolling ball this way; the convention is stated here and tested). A ball whose speed
+//    reaches zero rests where |g_t| <= rho g_n (tan(alpha) <= rho), otherwise it rolls on
+//    down the fall line.
+// 5. The hole (Rules of Golf, definitions: 108 mm across, at least 101.6 mm deep): a ball whose
+//    centre crosses the rim while on the plane, on a line passing b from the hole's centre at
+//    speed v, drops in when v <= v_c(b) = (L - R) sqrt(g / (2 R)), L = 2 sqrt(r_h^2 - b^2) the
+//    chord its centre travels over the hole: it must fall its own radius before meeting the far
+//    rim (Penner 2002, putting, after Holmes, "Putting: how a golf ball and hole interact",
+//    Am. J. Phys. 59, 129 (1991); on the centre line v_c = 1.31 m/s, Holmes' figure). A faster
+//    ball crosses: a lip_out event, and it goes on unchanged. A hop that lands with the whole
+//    ball inside the rim (centre within r_h - R of the hole's centre) is holed.
+//
+// Integration: the skid and the roll by classical RK4 at the fixed step dt_s, except that a
+// step in which the slip or the speed would reach zero is cut at that instant (the step's last
+// piece is taken at constant acceleration), so the transitions and the rest are located, not
+// stepped over. On the flat, and along the fall line, the motion is at constant acceleration
+// and the result is exact to rounding; across a slope it has RK4's O(dt^4) accuracy.
+//
+// Deterministic: no clocks, no randomness; the same inputs give bit-identical results.
+#ifndef SPORTSIM_SIM_GOLF_GROUND_H_
+#define SPORTSIM_SIM_GOLF_GROUND_H_
+
+#include <cstdint>
+#include <functional>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "absl/status/statusor.h"
+#include "sim/golf/ball_flight.h"
+#include "sim/golf/golf_ball.h"
+#include "sim/golf/surface.h"
+
+namespace sportsim::golf {
+
+/// Effect bits (sim/core/effects.h's convention: 0 is full physics; each bit switches one off).
+enum GroundEffect : uint32_t {
+  kGroundDisableSpin = 1u << 0,   ///< the landing's spin is ignored (the ball lands spinless)
+  kGroundDisableSlope = 1u << 1,  ///< gravity's pull along the plane is ignored
+};
+inline constexpr uint32_t kGroundEffectBits = kGroundDisableSpin | kGroundDisableSlope;
+
+/// The plane: its grade and the heading its fall line points toward.
+struct GroundPlane {
+  double slope_pct = 0.0;          ///< rise over run along the fall line (%); [0, 20]
+  double slope_toward_deg = 0.0;   ///< heading of the fall line (deg, ccw from +x); finite
+  Eigen::Vector3d Normal() const;  ///< unit, upward
+  double HeightAt(double x_m, double y_m) const;
+};
+
+/// The hole, on the plane.
+struct Hole {
+  double x_m = 0.0, y_m = 0.0;  ///< its centre (m)
+  double diameter_m = 0.108;    ///< (m); (ball diameter, 1]
+  double depth_m = 0.1016;      ///< (m); (0, 1]
+};
+
+/// How the ball meets the ground.
+enum class GroundStartKind {
+  kLanding,  ///< arriving from the air (a flight's landing): it bounces first
+  kPutt,     ///< struck along the plane without spin: it skids first
+  kRolling,  ///< already rolling without slip (as off a Stimpmeter)
+};
+
+struct GroundStart {
+  GroundStartKind kind = GroundStartKind::kLanding;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< x, y (z: the plane's height there)
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  ///< world frame; kPutt/kRolling:
+                                                           ///< projected onto the plane
+  Eigen::Vector3d spin_radps = Eigen::Vector3d::Zero();  ///< angular velocity (kLanding only)
+  double time_s = 0.0;  ///< the clock at the start (a flight's landing time)
+};
+
+/// The landing of `flight` (its frame: x downrange, y left, z up; the ball lands at z = 0, where
+/// the plane's contact point is put): its position, velocity, spin and time.
+GroundStart LandingFromFlight(const FlightResult& flight);
+/// A putt (struck, spinless) at `speed_mps` toward heading `direction_deg`, from (x, y).
+GroundStart PuttStart(double x_m, double y_m, double speed_mps, double direction_deg);
+/// A ball already rolling at `speed_mps` toward heading `direction_deg`, from (x, y).
+GroundStart RollingStart(double x_m, double y_m, double speed_mps, double direction_deg);
+
+struct GroundOptions {
+  double gravity_mps2 = 9.80665;   ///< (m/s^2); (0, 100]
+  double dt_s = 1e-3;              ///< RK4 step on the plane (s); (0, 0.01]
+  double sample_interval_s = 0.02; ///< path samples (s); 0 = none; [0, 10]
+  double max_time_s = 300.0;       ///< give up after (s, from the start); (0, 3600]
+  /// A rebound with less normal speed than this ends the bouncing (m/s); [0.001, 1].
+  /// 0.14 m/s is a hop of 1 mm.
+  double settle_speed_mps = 0.14;
+  bool hole = true;                ///< false: no hole on the plane
+  uint32_t effects = 0;            ///< GroundEffect bits
+  /// Polled every ode::kPollSteps steps; true stops the run with kCancelled.
+  std::function<bool()> cancelled;
+};
+
+enum class GroundEventKind { kLanding, kBounce, kRoll, kHoled, kLipOut, kRest };
+/// "landing", "bounce", "roll", "holed", "lip_out", "rest".
+std::string_view GroundEventName(GroundEventKind kind);
+
+struct GroundEvent {
+  double t_s = 0.0;
+  GroundEventKind kind = GroundEventKind::kRest;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< contact point (see above)
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  ///< the centre's, after the event
+  double spin_radps = 0.0;  ///< |angular velocity| after the event
+};
+
+struct GroundSample {
+  double t_s = 0.0;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< contact point (see above)
+  double speed_mps = 0.0;
+};
+
+struct GroundResult {
+  Eigen::Vector3d rest_m = Eigen::Vector3d::Zero();  ///< where it rests (the hole's centre at
+                                                     ///< the plane's height when holed)
+  double t_rest_s = 0.0;         ///< the clock at rest
+  bool holed = false;
+  int bounces = 0;               ///< impacts, the landing included
+  std::vector<GroundEvent> events;   ///< in time order; the last is kHoled or kRest
+  std::vector<GroundSample> samples; ///< every sample_interval_s from the start, then the rest
+  int64_t steps = 0;             ///< RK4 steps on the plane
+};
+
+/// Checks the inputs; InvalidArgument names the first bad field. A plane steeper than the
+/// surface can hold a ball at rest (tan(alpha) > rolling_resistance) is refused: the ball would
+/// never stop.
+absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
+                            const GroundPlane& plane, const Hole& hole,
+                            const GroundStart& start, const GroundOptions& options);
+
+/// Runs the ground phase to rest (or into the hole). InvalidArgument for bad inputs (see
+/// ValidateGround), OutOfRange when no rest comes within max_time_s, kCancelled when
+/// options.cancelled says so.
+absl::StatusOr<GroundResult> SimulateGround(const BallSpec& ball, const Surface& surface,
+                                            const GroundPlane& plane, const Hole& hole,
+                                            const GroundStart& start,
+                                            const GroundOptions& options);
+
+/// The capture speed of the hole for a ball crossing it with its centre's line b from the
+/// hole's centre (m/s; 0 when it cannot drop): (L - R) sqrt(g / (2 R)), L = 2 sqrt(r_h^2 - b^2).
+double HoleCaptureSpeed(double hole_radius_m, double ball_radius_m, double offset_m,
+                        double gravity_mps2);
+
+}  // namespace sportsim::golf
+
+#endif  // SPORTSIM_SIM_GOLF_GROUND_H_
