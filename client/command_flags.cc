@@ -145,7 +145,9 @@ const Flags& BallStrikeFlags() {
   static const Flags f = Join({
       {{"club", "launch a ball at each impact with this club: driver, 3-wood, 3-iron, 5-iron, "
                 "7-iron, 9-iron, pitching-wedge, sand-wedge (default: no ball)"},
-       {"dynamic_loft_deg"}, {"face_angle_deg"}, {"club_path_deg"}, {"cor"}},
+       {"dynamic_loft_deg"}, {"face_angle_deg"}, {"club_path_deg"}, {"cor"},
+       {"fairway", "roll the ball out to rest on a flat fairway: firm, normal or soft (default: "
+                   "the flight ends at its landing)"}},
       AirFlags(),
   });
   return f;
@@ -266,7 +268,9 @@ std::vector<CommandSpec> MakeSpecs() {
              TorqueFlags(), GolferFlags(), SwingDisableFlag(),
              {{"club", "launch a ball at the impact with this club: driver, 3-wood, 3-iron, "
                        "5-iron, 7-iron, 9-iron, pitching-wedge, sand-wedge (default: no ball)"},
-              {"dynamic_loft_deg"}, {"face_angle_deg"}, {"club_path_deg"}, {"cor"}},
+              {"dynamic_loft_deg"}, {"face_angle_deg"}, {"club_path_deg"}, {"cor"},
+              {"fairway", "roll the ball out to rest on a flat fairway: firm, normal or soft "
+                          "(default: the flight ends at its landing)"}},
              AirFlags()}),
        /*series=*/true},
       {"swing", "create", "", "a live swing session; prints its id and the seat tokens",
@@ -307,7 +311,34 @@ std::vector<CommandSpec> MakeSpecs() {
              AirFlags(),
              {{"dt", "RK4 step, [1e-5, 0.1] s (default 0.001 s)"},
               {"disable", "flight effects to switch off: drag, lift, spin_decay, wind"},
+              {"fairway", "roll the ball out to rest on a flat fairway: firm, normal or soft "
+                          "(default: the flight ends at its landing)"},
               {"svg", "side view (equal scales) and top view of the trajectory"}}}),
+       /*series=*/true, /*stream=*/false, flight_refusals},
+      {"golf", "simulate", "(a launch | --putt-speed MPS | --roll-speed MPS)",
+       "a golf shot to rest on the ground: bounces, spin-back, skid, roll, slope and hole",
+       Join({{{"course", "practice (a plane green, hole at the origin; the default) or range (a "
+                         "flat fairway)"},
+              {"stimp", "practice: the green's Stimpmeter speed, [1, 20] ft (default 10)"},
+              {"slope_pct", "practice: the green's grade, [0, 20] %, no steeper than the green "
+                            "holds a ball (default 0)"},
+              {"slope_toward_deg", "practice: heading the fall line points toward (deg)"},
+              {"fairway", "range: firm, normal or soft (default normal)"},
+              {"from", "the ball's position X,Y in metres (default -10,0 on practice, 0,0 on "
+                       "the range)"},
+              {"aim_deg", "a launch's target line, heading in deg (default toward the pin, or "
+                          "+x on the range)"},
+              {"ball_speed", "a launch: ball speed, (0, 120] m/s"},
+              {"launch_deg", "a launch: launch angle above the horizontal, [-90, 90] deg"},
+              {"spin_rpm", "a launch: total spin, [0, 30000] rpm"},
+              {"spin_axis_deg"}, {"launch_direction_deg"},
+              {"putt_speed", "a putt (struck: it skids first), [0, 15] m/s"},
+              {"putt_direction_deg", "the putt's heading (deg, ccw from +x; default 0)"},
+              {"roll_speed", "a ball already rolling (as off a Stimpmeter), [0, 15] m/s"},
+              {"roll_direction_deg", "the rolling ball's heading (deg, ccw from +x; default 0)"}},
+             AirFlags(),
+             {{"disable", "ground effects to switch off: ground_spin"},
+              {"svg", "the path from above, with the hole, bounces and rest"}}}),
        /*series=*/true, /*stream=*/false, flight_refusals},
   };
 }

@@ -24,6 +24,7 @@
 ABSL_DECLARE_FLAG(std::optional<double>, dt);
 ABSL_DECLARE_FLAG(std::vector<std::string>, disable);
 ABSL_DECLARE_FLAG(std::string, svg);
+ABSL_DECLARE_FLAG(std::string, fairway);  // golf_commands.cc
 
 ABSL_FLAG(std::optional<double>, ball_speed, std::nullopt, "Ball speed at launch (m/s)");
 ABSL_FLAG(std::optional<double>, launch_deg, std::nullopt, "Launch angle above the horizontal (deg)");
@@ -57,6 +58,7 @@ std::optional<std::string> BuildRequest(v1::SimulateFlightRequest* r) {
   l->set_spin_axis_deg(absl::GetFlag(FLAGS_spin_axis_deg));
   l->set_launch_direction_deg(absl::GetFlag(FLAGS_launch_direction_deg));
   if (auto bad = BuildFlightAir(r)) return bad;
+  r->set_fairway(absl::GetFlag(FLAGS_fairway));
   if (auto v = absl::GetFlag(FLAGS_dt)) r->set_dt_s(*v);
   for (const std::string& e : absl::GetFlag(FLAGS_disable)) {
     if (e == "drag") r->add_disabled_effects(v1::FLIGHT_EFFECT_DRAG);
@@ -112,6 +114,14 @@ void PrintFlightText(const v1::SimulateFlightResponse& f) {
       f.lateral_m() >= 0 ? "right" : "left", f.apex_m(), f.apex_m() / kMetresPerYard,
       f.apex_time_s(), f.flight_time_s(), f.landing_angle_deg(), f.landing_speed_mps(),
       f.air_density_kgpm3(), f.steps(), f.cpu_s() * 1e3);
+  if (f.has_total_m()) {
+    std::printf("rolled out on the %s: total %.2f m (%.1f yd), %.2f m %s, at rest after %.2f s "
+                "(%d events on the ground)\n",
+                f.rest().surface().c_str(), f.total_m(), f.total_m() / kMetresPerYard,
+                std::abs(f.total_lateral_m()), f.total_lateral_m() >= 0 ? "right" : "left",
+                f.ground_events_size() > 0 ? f.ground_events(f.ground_events_size() - 1).t_s() : 0.0,
+                f.ground_events_size());
+  }
 }
 
 namespace {

@@ -62,6 +62,13 @@ Commands:
       [--pressure-pa PA] [--humidity F] [--altitude-m M] [--dt S] [--sample-interval S]
       [--disable drag,lift,spin_decay,wind] [--aero ferguson2022|nathan] [--svg FILE]
       (RK4 at --dt: the flight takes no --integrator, --tolerance or --max-step)
+  golf simulate [flags]     a golf shot to rest on the ground: [--course practice|range]
+      (practice: [--stimp FT] [--slope-pct P --slope-toward-deg D], hole at the origin;
+      range: [--fairway firm|normal|soft]) [--from X,Y] and one of: a launch (--ball-speed
+      MPS --launch-deg DEG --spin-rpm RPM [--spin-axis-deg DEG] [--launch-direction-deg DEG]
+      [--aim-deg DEG] [air flags of flight simulate]), a putt (--putt-speed MPS
+      [--putt-direction-deg DEG]) or a rolling ball (--roll-speed MPS [--roll-direction-deg
+      DEG]); [--disable ground_spin] [--sample-interval S] [--svg FILE] (the path from above)
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
       --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
       [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]
@@ -583,7 +590,7 @@ int main(int argc, char** argv) {
     if (!text) {
       return UsageError("no help for '" + positional[0] +
                         (positional.size() > 1 ? " " + positional[1] : std::string()) +
-                        "' (commands: info, health, swing, flight, shot, table)");
+                        "' (commands: info, health, swing, flight, golf, shot, table)");
     }
     std::cout << *text;
     return 0;
@@ -604,7 +611,7 @@ int main(int argc, char** argv) {
   else return UsageError("--format: must be text, json, jsonl or csv, got '" + format + "'");
 
   if (positional.empty()) {
-    return UsageError("give a command: info, health, swing, flight, shot or table (sportsim "
+    return UsageError("give a command: info, health, swing, flight, golf, shot or table (sportsim "
                       "--help lists them)");
   }
   const std::string command = positional[0];
@@ -633,7 +640,9 @@ int main(int argc, char** argv) {
   if (command == "health") return RunHealth(ctx, rest);
   if (command == "swing") return RunSwing(ctx, rest);
   if (command == "flight") return RunFlight(ctx, rest);
+  if (command == "golf") return RunGolf(ctx, rest);
   if (command == "shot") return RunShot(ctx, rest);
   if (command == "table") return RunTable(ctx, rest);
-  return UsageError("unknown command '" + command + "' (info, health, swing, flight, shot, table)");
+  return UsageError("unknown command '" + command +
+                    "' (info, health, swing, flight, golf, shot, table)");
 }

@@ -7,6 +7,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "absl/flags/declare.h"
 #include "absl/flags/flag.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
@@ -14,6 +15,7 @@
 #include "client/swing_flags.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
+ABSL_DECLARE_FLAG(std::string, fairway);  // golf_commands.cc
 ABSL_FLAG(std::string, integrator, "rk4", "Swing integrator: book|euler|semi_implicit_euler|rk4|dp45");
 ABSL_FLAG(std::optional<double>, dt, std::nullopt, "Fixed step (s); default 0.0025");
 ABSL_FLAG(std::optional<double>, tolerance, std::nullopt, "dp45 tolerance; default 1e-8");
@@ -133,7 +135,7 @@ std::optional<std::string> BuildBallStrike(v1::BallStrike* b) {
     // The ball's own flags and the air it flies through mean nothing without a ball.
     for (const char* flag : {"dynamic_loft_deg", "face_angle_deg", "club_path_deg", "cor",
                              "wind", "temperature_c", "pressure_pa", "humidity", "altitude_m",
-                             "aero", "sample_interval"}) {
+                             "aero", "sample_interval", "fairway"}) {
       if (FlagGiven(flag)) return Dashed(flag) + ": describes the ball: give --club too";
     }
     return std::nullopt;
@@ -149,6 +151,7 @@ std::optional<std::string> BuildBallStrike(v1::BallStrike* b) {
   *b->mutable_wind() = air.wind();
   b->set_aero_fit(air.aero_fit());
   if (air.has_sample_interval_s()) b->set_sample_interval_s(air.sample_interval_s());
+  b->set_fairway(absl::GetFlag(FLAGS_fairway));
   return std::nullopt;
 }
 

@@ -22,6 +22,7 @@
 #include "sim/billiards/shot.h"
 #include "sim/core/cpu_clock.h"
 #include "server/swing/convert.h"
+#include "server/swing/golf_shot.h"
 #include "sim/swing/swing_simulation.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
@@ -326,6 +327,19 @@ class SwingService final : public v1::Swing::CallbackService {
     });
   }
 
+  grpc::ServerUnaryReactor* SimulateGolfShot(grpc::CallbackServerContext* ctx,
+                                             const v1::SimulateGolfShotRequest* request,
+                                             v1::SimulateGolfShotResponse* response) override {
+    return Pooled(pool_, ctx, [request, response](const WorkControl& control) {
+      absl::StatusOr<GolfShotJob> job = GolfShotJobFromProto(*request);
+      if (!job.ok()) return job.status();
+      const double cpu0 = ThreadCpuSeconds();
+      absl::Status st = RunGolfShot(*job, [&control] { return control.ShouldStop(); }, response);
+      response->set_cpu_s(ThreadCpuSeconds() - cpu0);
+      return st;
+    });
+  }
+
   // Like a swing, a flight polls its control (deadline, cancellation, CPU budget, shutdown).
   static absl::Status Fly(const v1::SimulateFlightRequest& request, const WorkControl& control,
                           v1::SimulateFlightResponse* response) {
@@ -335,10 +349,11 @@ class SwingService final : public v1::Swing::CallbackService {
     const double cpu0 = ThreadCpuSeconds();
     absl::StatusOr<golf::FlightResult> result =
         golf::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
-    const double cpu_s = ThreadCpuSeconds() - cpu0;
     if (!result.ok()) return result.status();
-    FlightResultToProto(*result, cpu_s, response);
-    return absl::OkStatus();
+    FlightResultToProto(*result, 0.0, response);
+    absl::Status rolled = RollOutToProto(*job, *result, response);  // with `fairway`
+    response->set_cpu_s(ThreadCpuSeconds() - cpu0);
+    return rolled;
   }
 };
 

@@ -218,8 +218,58 @@ void SwingResultToProto(const swing::SwingRunResult& r, double cpu_s,
   out->set_end_t_s(r.end_t_s);
 }
 
+absl::StatusOr<std::optional<golf::Surface>> FairwayFromProto(std::string_view field,
+                                                             const std::string& f) {
+  if (f.empty()) return std::optional<golf::Surface>();
+  const std::string name = f == "normal" ? "fairway"
+                           : f == "firm" ? "fairway_firm"
+                           : f == "soft" ? "fairway_soft"
+                                         : "";
+  if (name.empty()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "%s must be firm, normal or soft (or empty: no roll-out); got \"%s\"", field,
+        f.substr(0, 40)));
+  }
+  return std::optional<golf::Surface>(*golf::SurfaceByName(name));
+}
+
+absl::Status RollOutToProto(const FlightJob& job, const golf::FlightResult& flight,
+                            v1::SimulateFlightResponse* out) {
+  if (!job.fairway.has_value()) return absl::OkStatus();
+  golf::GroundOptions o;
+  o.hole = false;
+  o.sample_interval_s = 0;
+  o.cancelled = job.options.cancelled;
+  absl::StatusOr<golf::GroundResult> g =
+      golf::SimulateGround(job.ball, *job.fairway, golf::GroundPlane{}, golf::Hole{},
+                           golf::LandingFromFlight(flight), o);
+  if (!g.ok()) return g.status();
+  out->set_total_m(std::hypot(g->rest_m.x(), g->rest_m.y()));
+  out->set_total_lateral_m(-g->rest_m.y());
+  v1::GolfRest* rest = out->mutable_rest();
+  rest->set_x_m(g->rest_m.x());
+  rest->set_y_m(g->rest_m.y());
+  rest->set_z_m(g->rest_m.z());
+  rest->set_surface(job.fairway->name);
+  rest->set_holed(false);
+  for (const golf::GroundEvent& e : g->events) {
+    v1::GolfEvent* ev = out->add_ground_events();
+    ev->set_t_s(e.t_s);
+    ev->set_kind(std::string(golf::GroundEventName(e.kind)));
+    ev->set_x_m(e.position_m.x());
+    ev->set_y_m(e.position_m.y());
+    ev->set_z_m(e.position_m.z());
+    ev->set_speed_mps(e.velocity_mps.norm());
+    ev->set_spin_rpm(e.spin_radps / golf::kRpmToRadPerS);
+  }
+  return absl::OkStatus();
+}
+
 absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r) {
   FlightJob job;
+  absl::StatusOr<std::optional<golf::Surface>> fairway = FairwayFromProto("fairway", r.fairway());
+  if (!fairway.ok()) return fairway.status();
+  job.fairway = *fairway;
   const v1::LaunchConditions& l = r.launch();
   job.launch = {.ball_speed_mps = l.ball_speed_mps(),
                 .launch_angle_deg = l.launch_angle_deg(),
@@ -339,6 +389,7 @@ absl::StatusOr<StrikeJob> StrikeJobFromProto(const v1::BallStrike& b) {
   *flight.mutable_disabled_effects() = b.disabled_flight_effects();
   flight.set_aero_fit(b.aero_fit());
   if (b.has_sample_interval_s()) flight.set_sample_interval_s(b.sample_interval_s());
+  flight.set_fairway(b.fairway());
   flight.mutable_launch()->set_ball_speed_mps(60.0);
   absl::StatusOr<FlightJob> flight_job = FlightJobFromProto(flight);
   if (!flight_job.ok()) return PrefixStatus("ball.", flight_job.status());
@@ -375,12 +426,15 @@ void LaunchBall(const StrikeJob& job, const swing::SwingSample& impact, v1::Ball
   const double cpu0 = ThreadCpuSeconds();
   absl::StatusOr<golf::FlightResult> result = golf::SimulateFlight(
       flight.ball, flight.launch, flight.atmosphere, flight.wind, flight.options);
-  const double cpu_s = ThreadCpuSeconds() - cpu0;
   if (!result.ok()) {
     out->set_error(absl::StrCat("flight: ", result.status().message()));
     return;
   }
-  FlightResultToProto(*result, cpu_s, out->mutable_flight());
+  FlightResultToProto(*result, 0.0, out->mutable_flight());
+  if (absl::Status rolled = RollOutToProto(flight, *result, out->mutable_flight()); !rolled.ok()) {
+    out->set_error(absl::StrCat("roll-out: ", rolled.message()));
+  }
+  out->mutable_flight()->set_cpu_s(ThreadCpuSeconds() - cpu0);
 }
 
 void FlightResultToProto(const golf::FlightResult& f, double cpu_s,

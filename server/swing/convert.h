@@ -10,6 +10,8 @@
 #include "sim/golf/ball_flight.h"
 #include "sim/golf/club_ball_impact.h"
 #include "sim/golf/golf_ball.h"
+#include "sim/golf/ground.h"
+#include "sim/golf/surface.h"
 #include "sim/swing/swing_model.h"
 #include "sim/swing/swing_simulation.h"
 #include "sim/swing/swing_stepper.h"
@@ -27,6 +29,8 @@ struct FlightJob {
   golf::Atmosphere atmosphere;
   golf::Wind wind;
   golf::FlightOptions options;
+  /// The request's `fairway`: the flat fairway the ball rolls out on after landing.
+  std::optional<golf::Surface> fairway;
 };
 /// A validated BallStrike: the club and face, and the flight settings, checked once; each
 /// impact fills in the delivery's speed and attack angle and the flight's launch.
@@ -69,6 +73,13 @@ void SwingResultToProto(const swing::SwingRunResult& result, double cpu_s,
 absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& request);
 void FlightResultToProto(const golf::FlightResult& result, double cpu_s,
                          v1::SimulateFlightResponse* out);
+/// `fairway` ("", firm, normal, soft) -> the surface, nullopt for ""; errors name `field`.
+absl::StatusOr<std::optional<golf::Surface>> FairwayFromProto(std::string_view field,
+                                                             const std::string& fairway);
+/// With job.fairway: the ball from the flight's landing to rest on that flat fairway (the
+/// flight's frame, no hole), into total_m, rest and ground_events. OK and nothing without one.
+absl::Status RollOutToProto(const FlightJob& job, const golf::FlightResult& flight,
+                            v1::SimulateFlightResponse* out);
 
 /// The swing parameters with units, defaults and ranges, for GetInfo.
 std::vector<v1::ParameterInfo> SwingParameterInfo();

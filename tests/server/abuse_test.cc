@@ -179,9 +179,10 @@ TEST_F(AbuseTest, AReaderThatStallsPastTheLimitEndsItsBatch) {
   const grpc::Status st = reader->Finish();
   EXPECT_FALSE(st.ok());
   // One outcome a message: what the transport's flow-control windows held when the stall
-  // ended the call (about 1,100 of these ~4 kB outcomes here), against the 100,000 of a batch
-  // that went on.
-  EXPECT_LT(messages, 10000) << "the batch went on (100,000 outcomes)";
+  // ended the call (about 1,100 of these outcomes in a release build, 17,000 under ASan, whose
+  // slower server lets gRPC's windows grow further), against the 100,000 of a batch that went
+  // on (and would end OK).
+  EXPECT_LT(messages, 50000) << "the batch went on (100,000 outcomes)";
   EXPECT_TRUE(Eventually([&] { return PoolIdle(); }, 3));
   // A reader that keeps up is never stalled, however long the batch.
   v1::SimulateShotsRequest small;

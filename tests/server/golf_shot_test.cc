@@ -1,0 +1,226 @@
+// SimulateGolfShot: the request's validation (each bad field named, nothing run), the shot run
+// against the library (frames, events, the hole), and the RPC on the real server in-process.
+#include "server/swing/golf_shot.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <grpcpp/grpcpp.h>
+
+#include "gmock/gmock.h"
+#include "gtest/gtest.h"
+#include "server/app/server_app.h"
+#include "sim/golf/ground.h"
+#include "sportsim/v1/swing.grpc.pb.h"
+
+namespace sportsim::server {
+namespace {
+
+using ::testing::HasSubstr;
+
+v1::SimulateGolfShotRequest Putt(double speed, double direction_deg) {
+  v1::SimulateGolfShotRequest r;
+  r.mutable_putt()->set_speed_mps(speed);
+  r.mutable_putt()->set_direction_deg(direction_deg);
+  return r;
+}
+
+std::string Error(const v1::SimulateGolfShotRequest& r) {
+  absl::StatusOr<GolfShotJob> job = GolfShotJobFromProto(r);
+  EXPECT_FALSE(job.ok()) << r.ShortDebugString();
+  if (job.ok()) return "";
+  EXPECT_EQ(job.status().code(), absl::StatusCode::kInvalidArgument);
+  return std::string(job.status().message());
+}
+
+TEST(GolfShotTest, BadRequestsNameTheirField) {
+  v1::SimulateGolfShotRequest r = Putt(2, 0);
+  r.set_course("moon");
+  EXPECT_THAT(Error(r), HasSubstr("course"));
+  r = Putt(2, 0);
+  r.set_stimp_ft(0.5);
+  EXPECT_THAT(Error(r), HasSubstr("stimp_ft"));
+  r = Putt(2, 0);
+  r.set_slope_pct(NAN);
+  EXPECT_THAT(Error(r), HasSubstr("slope_pct"));
+  r = Putt(2, 0);
+  r.set_slope_pct(9);  // a Stimp-10 green holds a ball up to 7.8 %
+  EXPECT_THAT(Error(r), HasSubstr("slope_pct"));
+  r = Putt(std::numeric_limits<double>::infinity(), 0);
+  EXPECT_THAT(Error(r), HasSubstr("putt.speed_mps"));
+  r = Putt(2, 0);
+  r.set_from_x_m(0.02);
+  r.set_from_y_m(0);
+  EXPECT_THAT(Error(r), HasSubstr("from_x_m"));
+  r = Putt(2, 0);
+  r.set_course("range");
+  r.set_fairway("icy");
+  EXPECT_THAT(Error(r), HasSubstr("fairway"));
+  r = Putt(2, 0);
+  r.set_aim_deg(10);
+  EXPECT_THAT(Error(r), HasSubstr("aim_deg"));
+  v1::SimulateGolfShotRequest none;
+  EXPECT_THAT(Error(none), HasSubstr("shot"));
+  v1::SimulateGolfShotRequest launch;
+  launch.mutable_launch()->set_ball_speed_mps(40);
+  launch.mutable_launch()->set_launch_angle_deg(20);
+  launch.mutable_launch()->set_spin_rpm(-5);
+  EXPECT_THAT(Error(launch), HasSubstr("launch.spin_rpm"));
+}
+
+// A putt on practice is the library's putt from the same point: the same rest to the bit; a
+// putt of the right speed straight at the hole drops.
+TEST(GolfShotTest, APuttIsTheLibrarysPuttAndTheHoleTakesIt) {
+  v1::SimulateGolfShotRequest r = Putt(2.0, 10);
+  r.set_stimp_ft(11);
+  r.set_slope_pct(1.5);
+  r.set_slope_toward_deg(-60);
+  r.set_from_x_m(-3);
+  r.set_from_y_m(1);
+  absl::StatusOr<GolfShotJob> job = GolfShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  v1::SimulateGolfShotResponse out;
+  ASSERT_TRUE(RunGolfShot(*job, {}, &out).ok());
+  const absl::StatusOr<golf::GroundResult> direct = golf::SimulateGround(
+      golf::BallSpec{}, *golf::GreenOfStimp(11), {.slope_pct = 1.5, .slope_toward_deg = -60},
+      golf::Hole{}, golf::PuttStart(-3, 1, 2.0, 10), golf::GroundOptions{});
+  ASSERT_TRUE(direct.ok());
+  EXPECT_EQ(out.rest().x_m(), direct->rest_m.x());
+  EXPECT_EQ(out.rest().y_m(), direct->rest_m.y());
+  EXPECT_EQ(out.events_size(), static_cast<int>(direct->events.size()));
+  EXPECT_EQ(out.rest().surface(), "green");
+  EXPECT_NEAR(out.rest().distance_to_pin_m(), std::hypot(direct->rest_m.x(), direct->rest_m.y()),
+              1e-12);
+  EXPECT_EQ(out.carry_m(), 0.0);
+  EXPECT_FALSE(out.has_flight());
+
+  // Straight at the hole from 3 m on the flat, rolling 1 m/s at the rim: holed.
+  const golf::Surface green = *golf::GreenOfStimp(10);
+  const double a = 5.0 / 7.0 * green.rolling_resistance * 9.80665;
+  v1::SimulateGolfShotRequest holed;
+  holed.mutable_roll()->set_speed_mps(std::sqrt(1.0 + 2 * a * (3 - 0.054)));
+  holed.mutable_roll()->set_direction_deg(0);
+  holed.set_from_x_m(-3);
+  holed.set_from_y_m(0);
+  job = GolfShotJobFromProto(holed);
+  ASSERT_TRUE(job.ok());
+  v1::SimulateGolfShotResponse in;
+  ASSERT_TRUE(RunGolfShot(*job, {}, &in).ok());
+  EXPECT_TRUE(in.rest().holed());
+  EXPECT_EQ(in.rest().distance_to_pin_m(), 0.0);
+  EXPECT_EQ(in.events(in.events_size() - 1).kind(), "holed");
+}
+
+// A launch on the range: the flight's carry, then the ground; the frame turns with the aim (a
+// shot aimed north lands north of the tee); total beyond carry; the path starts at the tee.
+TEST(GolfShotTest, ALaunchFliesAlongItsAimThenRollsOut) {
+  v1::SimulateGolfShotRequest r;
+  r.set_course("range");
+  r.set_aim_deg(90);
+  r.set_from_x_m(5);
+  r.set_from_y_m(-2);
+  v1::LaunchConditions* l = r.mutable_launch();
+  l->set_ball_speed_mps(167 * golf::kMphToMps);
+  l->set_launch_angle_deg(10.9);
+  l->set_spin_rpm(2686);
+  absl::StatusOr<GolfShotJob> job = GolfShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  v1::SimulateGolfShotResponse out;
+  ASSERT_TRUE(RunGolfShot(*job, {}, &out).ok());
+  EXPECT_NEAR(out.carry_m(), out.flight().carry_m(), 1e-12);
+  EXPECT_GT(out.total_m(), out.carry_m() + 10);
+  EXPECT_NEAR(out.rest().x_m(), 5, 1e-6);  // straight north
+  EXPECT_NEAR(out.rest().y_m(), -2 + out.total_m(), 1e-6);
+  EXPECT_NEAR(out.lateral_m(), 0, 1e-6);
+  EXPECT_EQ(out.rest().surface(), "fairway");
+  EXPECT_FALSE(out.rest().has_distance_to_pin_m());
+  ASSERT_GT(out.path_size(), 10);
+  EXPECT_EQ(out.path(0).x_m(), 5);
+  EXPECT_EQ(out.path(0).y_m(), -2);
+  EXPECT_EQ(out.events(0).kind(), "landing");
+  EXPECT_NEAR(out.events(0).y_m(), -2 + out.carry_m(), 1e-6);
+  EXPECT_EQ(out.flight().samples_size(), 0);  // the path carries them
+  // A firm fairway rolls farther than a soft one.
+  r.set_fairway("firm");
+  v1::SimulateGolfShotResponse firm, soft;
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(r), {}, &firm).ok());
+  r.set_fairway("soft");
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(r), {}, &soft).ok());
+  EXPECT_GT(firm.total_m(), soft.total_m() + 20);
+}
+
+// SimulateFlight with `fairway` goes on to rest: the library's ground phase from the flight's
+// landing, total beyond carry; without it nothing of the ground is set; a bad value is named.
+TEST(GolfShotTest, AFlightRollsOutWhenAsked) {
+  v1::SimulateFlightRequest r;
+  r.mutable_launch()->set_ball_speed_mps(60);
+  r.mutable_launch()->set_launch_angle_deg(12);
+  r.mutable_launch()->set_spin_rpm(3000);
+  r.mutable_launch()->set_spin_axis_deg(-4);
+  r.set_fairway("firm");
+  absl::StatusOr<FlightJob> job = FlightJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  job->options.sample_interval_s = 0;
+  const absl::StatusOr<golf::FlightResult> flight =
+      golf::SimulateFlight(job->ball, job->launch, job->atmosphere, job->wind, job->options);
+  ASSERT_TRUE(flight.ok());
+  v1::SimulateFlightResponse out;
+  FlightResultToProto(*flight, 0, &out);
+  ASSERT_TRUE(RollOutToProto(*job, *flight, &out).ok());
+  golf::GroundOptions o;
+  o.hole = false;
+  o.sample_interval_s = 0;
+  const absl::StatusOr<golf::GroundResult> g =
+      golf::SimulateGround(golf::BallSpec{}, *golf::SurfaceByName("fairway_firm"), {}, {},
+                           golf::LandingFromFlight(*flight), o);
+  ASSERT_TRUE(g.ok());
+  ASSERT_TRUE(out.has_total_m());
+  EXPECT_EQ(out.total_m(), std::hypot(g->rest_m.x(), g->rest_m.y()));
+  EXPECT_GT(out.total_m(), out.carry_m() + 5);
+  EXPECT_EQ(out.rest().surface(), "fairway_firm");
+  EXPECT_EQ(out.ground_events(0).kind(), "landing");
+  EXPECT_EQ(out.ground_events(out.ground_events_size() - 1).kind(), "rest");
+  EXPECT_LT(out.total_lateral_m(), 0.0);  // a draw axis: left, on the ground too
+  r.set_fairway("");
+  job = FlightJobFromProto(r);
+  v1::SimulateFlightResponse bare;
+  ASSERT_TRUE(RollOutToProto(*job, *flight, &bare).ok());
+  EXPECT_FALSE(bare.has_total_m());
+  EXPECT_FALSE(bare.has_rest());
+  r.set_fairway("wet");
+  EXPECT_FALSE(FlightJobFromProto(r).ok());
+  EXPECT_THAT(std::string(FlightJobFromProto(r).status().message()), HasSubstr("fairway"));
+  v1::BallStrike strike;
+  strike.set_club("7-iron");
+  strike.set_fairway("ice");
+  EXPECT_THAT(std::string(StrikeJobFromProto(strike).status().message()), HasSubstr("ball.fairway"));
+}
+
+// Over gRPC: the same answer as the run in-process, and a bad field named.
+TEST(GolfShotTest, OverGrpc) {
+  ServerConfig config;
+  config.listen = "127.0.0.1:0";
+  absl::StatusOr<std::unique_ptr<ServerApp>> app = ServerApp::Start(config);
+  ASSERT_TRUE(app.ok()) << app.status();
+  auto stub = v1::Swing::NewStub(
+      grpc::CreateChannel((*app)->address(), grpc::InsecureChannelCredentials()));
+  v1::SimulateGolfShotRequest r = Putt(2.4, 3);
+  grpc::ClientContext ctx;
+  ctx.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+  v1::SimulateGolfShotResponse resp;
+  ASSERT_TRUE(stub->SimulateGolfShot(&ctx, r, &resp).ok());
+  v1::SimulateGolfShotResponse local;
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(r), {}, &local).ok());
+  local.set_cpu_s(resp.cpu_s());
+  EXPECT_EQ(resp.SerializeAsString(), local.SerializeAsString());
+  EXPECT_GT(resp.cpu_s(), 0.0);
+  r.mutable_putt()->set_direction_deg(NAN);
+  grpc::ClientContext ctx2;
+  const grpc::Status bad = stub->SimulateGolfShot(&ctx2, r, &resp);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(bad.error_message(), HasSubstr("putt.direction_deg"));
+  (*app)->Shutdown(absl::Seconds(1));
+}
+
+}  // namespace
+}  // namespace sportsim::server
