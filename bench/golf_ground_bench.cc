@@ -1,7 +1,8 @@
 // CPU of the golf ball's ground phase per shot beside its flight's: a tour drive and a tour
 // 7-iron (flight, then bounces and roll on the normal fairway), and putts of 3 and 10 m on a
-// Stimp 10 green, flat and across a 2 % slope. Defaults throughout (RK4 at 1 ms in the air
-// and on the ground), no samples. Results: docs/golf-ground.md.
+// Stimp 10 green, flat and across a 2 % slope (RK4 on the ground at 1, 2 and 5 ms; a flat
+// green needs no steps). Flights at their default (RK4, 1 ms), no samples. Results:
+// docs/golf-ground.md.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -47,7 +48,7 @@ void BM_GroundAfterFlight(benchmark::State& state) {
 }
 BENCHMARK(BM_GroundAfterFlight)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
-// Args: putt length (m), slope (%).
+// Args: putt length (m), slope (%), RK4 step (us).
 void BM_Putt(benchmark::State& state) {
   const Surface green = *GreenOfStimp(10);
   const double length = static_cast<double>(state.range(0));
@@ -57,13 +58,21 @@ void BM_Putt(benchmark::State& state) {
   const double speed = std::sqrt(2 * length * 5.0 / 7.0 * green.rolling_resistance * 9.80665);
   GroundOptions o = Quiet();
   o.hole = true;
+  o.dt_s = 1e-6 * static_cast<double>(state.range(2));
   const Hole hole{.x_m = length + 1.0, .y_m = 0};  // never reached: every putt runs to rest
   for (auto _ : state) {
     benchmark::DoNotOptimize(SimulateGround(BallSpec{}, green, plane, hole,
                                             PuttStart(0, 0, speed, 0), o));
   }
 }
-BENCHMARK(BM_Putt)->Args({3, 0})->Args({10, 0})->Args({10, 2})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Putt)
+    ->Args({3, 0, 1000})
+    ->Args({10, 0, 1000})
+    ->Args({3, 2, 1000})
+    ->Args({10, 2, 1000})
+    ->Args({10, 2, 2000})
+    ->Args({10, 2, 5000})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace sportsim::golf

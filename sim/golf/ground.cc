@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "absl/status/status.h"
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "sim/core/check.h"
 #include "sim/core/effects.h"
@@ -21,6 +22,8 @@ using Eigen::Vector3d;
 constexpr double kPi = std::numbers::pi;
 // The steepest plane (%): a putting surface or a fairway, not a wall.
 constexpr double kMaxSlopePct = 20.0;
+// The most path samples a run may ask for (max_time_s / sample_interval_s).
+constexpr double kMaxSamples = 1e6;
 // Impacts before the bouncing is ended by force (each impact at most keeps 0.765 of the normal
 // speed, so ordinary runs end in tens).
 constexpr int kMaxImpacts = 1000;
@@ -28,6 +31,22 @@ constexpr int kMaxImpacts = 1000;
 Vector3d Unit(const Vector3d& v, const Vector3d& fallback) {
   const double n = v.norm();
   return n > 0.0 ? Vector3d(v / n) : fallback;
+}
+
+// The cubic Hermite interpolant of a step of length h from (p0, v0) to (p1, v1), at the
+// fraction f of the step: the position and the velocity. Exact for constant acceleration.
+struct HermitePoint {
+  Vector3d p, v;
+};
+HermitePoint Hermite(const Vector3d& p0, const Vector3d& v0, const Vector3d& p1,
+                     const Vector3d& v1, double h, double f) {
+  const double f2 = f * f, f3 = f2 * f;
+  const Vector3d m0 = h * v0, m1 = h * v1;
+  return {(2 * f3 - 3 * f2 + 1) * p0 + (f3 - 2 * f2 + f) * m0 + (-2 * f3 + 3 * f2) * p1 +
+              (f3 - f2) * m1,
+          ((6 * f2 - 6 * f) * p0 + (3 * f2 - 4 * f + 1) * m0 + (-6 * f2 + 6 * f) * p1 +
+           (3 * f2 - 2 * f) * m1) /
+              h};
 }
 
 // What the run needs of the inputs, resolved once.
@@ -75,13 +94,13 @@ class Run {
     result_.samples.push_back(GroundSample{.t_s = t, .position_m = Contact(centre),
                                            .speed_mps = speed});
   }
-  // Samples due in (t0, t1] along the segment c0 -> c1 (linear in between).
-  void SampleSegment(double t0, double t1, const Vector3d& c0, const Vector3d& c1, double s0,
-                     double s1) {
+  // Samples due in (t0, t1] along the step from -> to (on its Hermite interpolant).
+  void SampleSegment(double t0, double t1, const Ball& from, const Ball& to) {
     if (options_.sample_interval_s <= 0.0) return;
     while (next_sample_ <= t1 && t1 > t0) {
       const double f = std::clamp((next_sample_ - t0) / (t1 - t0), 0.0, 1.0);
-      Sample(next_sample_, c0 + f * (c1 - c0), s0 + f * (s1 - s0));
+      const HermitePoint q = Hermite(from.c, from.v, to.c, to.v, t1 - t0, f);
+      Sample(next_sample_, q.p, q.v.norm());
       next_sample_ = start_t_ + options_.sample_interval_s * static_cast<double>(++samples_);
     }
   }
@@ -198,26 +217,20 @@ bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
   }
   if (d0.squaredNorm() <= r2) return false;  // only entries count
   // The step's path as the cubic Hermite interpolant of its ends (positions and velocities):
-  // as accurate as the step itself, where a chord is not.
+  // as accurate as the step itself, where a chord is not. It lies in the hull of its Bezier
+  // points d0, d0 + m0/3, d1 - m1/3, d1: a step whose hull stays outside the rim is passed by.
   const Vector3d m0 = h * from.v, m1 = h * to.v;
-  auto at = [&](double f) {
-    const double f2 = f * f, f3 = f2 * f;
-    return Vector3d((2 * f3 - 3 * f2 + 1) * d0 + (f3 - 2 * f2 + f) * m0 + (-2 * f3 + 3 * f2) * d1 +
-                    (f3 - f2) * m1);
-  };
-  auto rate = [&](double f) {  // d/df
-    const double f2 = f * f;
-    return Vector3d((6 * f2 - 6 * f) * d0 + (3 * f2 - 4 * f + 1) * m0 + (-6 * f2 + 6 * f) * d1 +
-                    (3 * f2 - 2 * f) * m1);
-  };
-  // The first crossing of the rim: sample the step finely enough that the path cannot enter
-  // and leave between samples unseen (it moves at most a few millimetres a step), then
-  // bisect.
-  constexpr int kProbes = 16;
+  const double reach = std::max({(m0 / 3.0).norm(), (d1 - m1 / 3.0 - d0).norm(), (d1 - d0).norm()});
+  if (d0.norm() - reach > e_.hole_r) return false;
+  auto at = [&](double f) { return Hermite(d0, from.v, d1, to.v, h, f); };
+  // The first crossing of the rim: probes close enough that the path cannot enter and leave
+  // the rim between two unseen (a quarter of the radius apart at most), then bisection.
+  const int probes = static_cast<int>(
+      std::clamp(std::ceil(3.0 * reach / (0.25 * e_.hole_r)), 16.0, 1e6));
   double lo = 0.0, hi = -1.0;
-  for (int i = 1; i <= kProbes; ++i) {
-    const double f = static_cast<double>(i) / kProbes;
-    if (at(f).squaredNorm() <= r2) {
+  for (int i = 1; i <= probes; ++i) {
+    const double f = static_cast<double>(i) / probes;
+    if (at(f).p.squaredNorm() <= r2) {
       hi = f;
       break;
     }
@@ -226,11 +239,12 @@ bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
   if (hi < 0.0) return false;
   for (int i = 0; i < 60 && hi - lo > 1e-15; ++i) {
     const double mid = 0.5 * (lo + hi);
-    (at(mid).squaredNorm() <= r2 ? hi : lo) = mid;
+    (at(mid).p.squaredNorm() <= r2 ? hi : lo) = mid;
   }
   const double lambda = hi;
-  const Vector3d de = at(lambda);
-  const Vector3d ve = rate(lambda) / h;
+  const HermitePoint entry_point = at(lambda);
+  const Vector3d& de = entry_point.p;
+  const Vector3d& ve = entry_point.v;
   const double speed = ve.norm();
   const Vector3d dir = Unit(ve, Unit(d1 - d0, e_.fall));
   const double offset = std::abs(de.cross(dir).dot(e_.n));
@@ -255,7 +269,11 @@ bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
 // The skid and the roll on the plane, to rest or into the hole.
 absl::Status Run::OnPlane() {
   const Vector3d& n = e_.n;
-  const double h = options_.dt_s;
+  // Without a pull along the plane (flat, or the slope switched off) neither the slip's nor the
+  // velocity's direction turns: the skid and the roll are each at constant acceleration, and
+  // one step reaches each transition exactly (the step is cut there). Otherwise RK4 at dt_s.
+  const bool straight = e_.g_t.squaredNorm() == 0.0;
+  const double h = straight ? options_.max_time_s : options_.dt_s;
   const double rate_slip = e_.mu * e_.g_n * (1.0 + 1.0 / e_.k);
   // The slip of the contact point (tangential: the ball is on the plane).
   Vector3d s = b_.v + b_.w.cross(-e_.radius * n);
@@ -334,7 +352,7 @@ absl::Status Run::OnPlane() {
     b_.w = spin_of(b_.v, s);
     t_ = t0 + step;
     ++result_.steps;
-    SampleSegment(t0, t_, from.c, b_.c, from.v.norm(), b_.v.norm());
+    SampleSegment(t0, t_, from, b_);
     if (CrossHole(t0, step, from, b_)) {
       holed_ = true;
       return absl::OkStatus();
@@ -475,13 +493,26 @@ absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
           {"slope_toward_deg", plane.slope_toward_deg, -1e6, false, 1e6},
           {"gravity_mps2", options.gravity_mps2, 0, true, 100},
           {"dt_s", options.dt_s, 1e-6, false, 0.01},
-          {"sample_interval_s", options.sample_interval_s, 0, false, 10},
+
           {"max_time_s", options.max_time_s, 0, true, 3600},
           {"settle_speed_mps", options.settle_speed_mps, 0.001, false, 1},
           {"start.time_s", start.time_s, -1e6, false, 1e6},
       });
       !s.ok()) {
     return s;
+  }
+  // Samples: none, or at most kMaxSamples over max_time_s.
+  if (options.sample_interval_s != 0.0) {
+    if (absl::Status s =
+            CheckFiniteInRange("sample_interval_s", options.sample_interval_s, 1e-3, false, 10, false);
+        !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat(s.message(), " (or 0: no samples)"));
+    }
+    if (options.max_time_s / options.sample_interval_s > kMaxSamples) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "sample_interval_s: %g s over max_time_s %g s is more than %g samples",
+          options.sample_interval_s, options.max_time_s, kMaxSamples));
+    }
   }
   if (absl::Status s = ValidateEffectBits("effects", options.effects, kGroundEffectBits);
       !s.ok()) {

@@ -42,11 +42,15 @@
 //    ball crosses: a lip_out event, and it goes on unchanged. A hop that lands with the whole
 //    ball inside the rim (centre within r_h - R of the hole's centre) is holed.
 //
-// Integration: the skid and the roll by classical RK4 at the fixed step dt_s, except that a
-// step in which the slip or the speed would reach zero is cut at that instant (the step's last
-// piece is taken at constant acceleration), so the transitions and the rest are located, not
-// stepped over. On the flat, and along the fall line, the motion is at constant acceleration
-// and the result is exact to rounding; across a slope it has RK4's O(dt^4) accuracy.
+// Integration: without a pull along the plane (flat, or the slope switched off) the skid and
+// the roll are each at constant acceleration in a fixed direction and are solved exactly, one
+// piece each. Otherwise they are integrated by classical RK4 at the fixed step dt_s, except that
+// a step in which the slip or the speed would reach zero is cut at that instant (the slip's end
+// exactly through the invariant v - k/(1+k) s, the roll's last piece at constant acceleration),
+// so the transitions and the rest are located, not stepped over. Along the fall line the result
+// is exact to rounding; across a slope the rest converges with the step (docs/golf-ground.md).
+// The rim's crossing and the path's samples are taken on each step's cubic Hermite
+// interpolant.
 //
 // Deterministic: no clocks, no randomness; the same inputs give bit-identical results.
 #ifndef SPORTSIM_SIM_GOLF_GROUND_H_
@@ -115,7 +119,8 @@ GroundStart RollingStart(double x_m, double y_m, double speed_mps, double direct
 struct GroundOptions {
   double gravity_mps2 = 9.80665;   ///< (m/s^2); (0, 100]
   double dt_s = 1e-3;              ///< RK4 step on the plane (s); (0, 0.01]
-  double sample_interval_s = 0.02; ///< path samples (s); 0 = none; [0, 10]
+  double sample_interval_s = 0.02; ///< path samples (s); 0 = none, else [0.001, 10] and at
+                                   ///< most 1e6 of them in max_time_s
   double max_time_s = 300.0;       ///< give up after (s, from the start); (0, 3600]
   /// A rebound with less normal speed than this ends the bouncing (m/s); [0.001, 1].
   /// 0.14 m/s is a hop of 1 mm.

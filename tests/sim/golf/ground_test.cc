@@ -279,6 +279,9 @@ TEST(GroundTest, BadInputsNameTheField) {
   o.dt_s = 0;
   EXPECT_THAT(message({}, PuttStart(1, 1, 1, 0), o), HasSubstr("dt_s"));
   o = GroundOptions{};
+  o.sample_interval_s = 1e-300;  // a fuzzer's find: unbounded samples
+  EXPECT_THAT(message({}, PuttStart(1, 1, 1, 0), o), HasSubstr("sample_interval_s"));
+  o = GroundOptions{};
   o.effects = 1u << 7;
   EXPECT_THAT(message({}, PuttStart(1, 1, 1, 0), o), HasSubstr("effects"));
   EXPECT_FALSE(SurfaceByName("ice").ok());
