@@ -324,6 +324,7 @@ std::vector<CommandSpec> MakeSpecs() {
                             "holds a ball (default 0)"},
               {"slope_toward_deg", "practice: heading the fall line points toward (deg)"},
               {"fairway", "range: firm, normal or soft (default normal)"},
+              {"flagstick", "practice: the flagstick (19.05 mm) is in the hole"},
               {"from", "the ball's position X,Y in metres (default -10,0 on practice, 0,0 on "
                        "the range)"},
               {"aim_deg", "a launch's target line, heading in deg (default toward the pin, or "

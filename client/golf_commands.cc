@@ -45,6 +45,7 @@ ABSL_FLAG(double, putt_direction_deg, 0.0, "golf: a putt's heading (deg, ccw fro
 ABSL_FLAG(std::optional<double>, roll_speed, std::nullopt,
           "golf: a ball already rolling: its speed (m/s)");
 ABSL_FLAG(double, roll_direction_deg, 0.0, "golf: the rolling ball's heading (deg, ccw from +x)");
+ABSL_FLAG(bool, flagstick, false, "golf practice: the flagstick is in the hole");
 
 namespace sportsim::cli {
 namespace {
@@ -57,6 +58,7 @@ std::optional<std::string> BuildRequest(v1::SimulateGolfShotRequest* r) {
   r->set_slope_pct(absl::GetFlag(FLAGS_slope_pct));
   r->set_slope_toward_deg(absl::GetFlag(FLAGS_slope_toward_deg));
   r->set_fairway(absl::GetFlag(FLAGS_fairway));
+  r->set_flagstick(absl::GetFlag(FLAGS_flagstick));
   if (const std::string from = absl::GetFlag(FLAGS_from); !from.empty()) {
     const std::vector<std::string> xy = absl::StrSplit(from, ',');
     double x = 0, y = 0;

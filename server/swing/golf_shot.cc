@@ -76,15 +76,16 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
           r.slope_pct(), job.surface.stimp_ft(), 100.0 * job.surface.rolling_resistance));
     }
     job.has_hole = true;
+    if (r.flagstick()) job.hole.flagstick_diameter_m = golf::kFlagstickDiameter;
     if (!r.fairway().empty()) {
       return absl::InvalidArgumentError("fairway: the practice course is a green (course range "
                                         "has a fairway)");
     }
   } else {
-    if (r.has_stimp_ft() || r.slope_pct() != 0 || r.slope_toward_deg() != 0) {
+    if (r.has_stimp_ft() || r.slope_pct() != 0 || r.slope_toward_deg() != 0 || r.flagstick()) {
       return absl::InvalidArgumentError(
-          "stimp_ft, slope_pct, slope_toward_deg: the range is a flat fairway (they set the "
-          "practice green)");
+          "stimp_ft, slope_pct, slope_toward_deg, flagstick: the range is a flat fairway "
+          "without a hole (they set the practice green)");
     }
     const std::string& f = r.fairway();
     const std::string name = f.empty() || f == "normal" ? "fairway"

@@ -62,6 +62,8 @@ struct Env {
   double rho = 0.0;   // rolling resistance
   Vector3d hole_c;    // the hole's centre, on the plane
   double hole_r = 0.0;
+  double stick_r = 0.0;  // the flagstick's radius; 0: out
+  double stick_e = 0.0;  // its restitution
   bool hole = false;
 };
 
@@ -137,7 +139,12 @@ class Run {
   void Hop();
   // The hole as the contact point moves q0 -> q1 (speeds v0 -> v1) over [t0, t0 + h]:
   // true when the ball drops in (t_ and the ball set to the entry).
-  bool CrossHole(double t0, double h, const Ball& from, const Ball& to);
+  enum class Rim { kNone, kHoled, kDeflected };
+  Rim CrossHole(double t0, double h, const Ball& from, const Ball& to);
+  // The ball meets the flagstick after entering the rim at `entry` (time te): holed, or b_ and
+  // t_ set to the ball leaving the stick.
+  Rim HitFlagstick(const Ball& entry, const Vector3d& de, const Vector3d& dir, double offset,
+                   double te);
   absl::Status OnPlane();
 
   const Env& e_;
@@ -206,22 +213,22 @@ void Run::Hop() {
   t_ += tf;
 }
 
-bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
-  if (!e_.hole) return false;
+Run::Rim Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
+  if (!e_.hole) return Rim::kNone;
   const Vector3d d0 = Contact(from.c) - e_.hole_c;
   const Vector3d d1 = Contact(to.c) - e_.hole_c;
   const double r2 = e_.hole_r * e_.hole_r;
   if (in_rim_) {
     if (d1.squaredNorm() > r2) in_rim_ = false;
-    return false;
+    return Rim::kNone;
   }
-  if (d0.squaredNorm() <= r2) return false;  // only entries count
+  if (d0.squaredNorm() <= r2) return Rim::kNone;  // only entries count
   // The step's path as the cubic Hermite interpolant of its ends (positions and velocities):
   // as accurate as the step itself, where a chord is not. It lies in the hull of its Bezier
   // points d0, d0 + m0/3, d1 - m1/3, d1: a step whose hull stays outside the rim is passed by.
   const Vector3d m0 = h * from.v, m1 = h * to.v;
   const double reach = std::max({(m0 / 3.0).norm(), (d1 - m1 / 3.0 - d0).norm(), (d1 - d0).norm()});
-  if (d0.norm() - reach > e_.hole_r) return false;
+  if (d0.norm() - reach > e_.hole_r) return Rim::kNone;
   auto at = [&](double f) { return Hermite(d0, from.v, d1, to.v, h, f); };
   // The first crossing of the rim: probes close enough that the path cannot enter and leave
   // the rim between two unseen (a quarter of the radius apart at most), then bisection.
@@ -236,7 +243,7 @@ bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
     }
     lo = f;
   }
-  if (hi < 0.0) return false;
+  if (hi < 0.0) return Rim::kNone;
   for (int i = 0; i < 60 && hi - lo > 1e-15; ++i) {
     const double mid = 0.5 * (lo + hi);
     (at(mid).p.squaredNorm() <= r2 ? hi : lo) = mid;
@@ -253,7 +260,11 @@ bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
   if (speed <= HoleCaptureSpeed(e_.hole_r, e_.radius, offset, -e_.g.z())) {
     b_ = entry;
     t_ = te;
-    return true;
+    return Rim::kHoled;
+  }
+  if (e_.stick_r > 0.0 && offset < e_.stick_r + e_.radius) {
+    in_rim_ = true;
+    return HitFlagstick(entry, de, dir, offset, te);
   }
   const Ball keep = b_;
   const double keep_t = t_;
@@ -263,7 +274,47 @@ bool Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
   b_ = keep;
   t_ = keep_t;
   in_rim_ = true;
-  return false;
+  return Rim::kNone;
+}
+
+Run::Rim Run::HitFlagstick(const Ball& entry, const Vector3d& de, const Vector3d& dir,
+                           double offset, double te) {
+  const double speed = entry.v.norm();
+  const double reach = e_.stick_r + e_.radius;  // centre to centre at contact
+  // Along the line from the rim to the contact, then the contact's normal (in the plane).
+  const double s1 = std::max(0.0, -de.dot(dir) - std::sqrt(reach * reach - offset * offset));
+  const Vector3d c = de + s1 * dir;
+  const Vector3d nc = Unit(c, -dir);
+  const Vector3d v1 = entry.v - (1.0 + e_.stick_e) * entry.v.dot(nc) * nc;
+  const double t1 = s1 / speed;
+  const double g = -e_.g.z();
+  const double v1n = v1.norm();
+  bool holed = v1n == 0.0;
+  Vector3d exit = c;
+  double t_exit = t1;
+  if (!holed) {
+    // It reaches the rim again when its leading side does (its centre R short of the rim),
+    // having fallen d since the near rim. It is in if by then it has fallen its radius (the
+    // wall is met below its centre), or if it has too little speed left to climb the drop
+    // back over the lip (v^2 < 2 g d).
+    const Vector3d u = v1 / v1n;
+    const double cu = c.dot(u);
+    const double to_rim = -cu + std::sqrt(std::max(0.0, cu * cu - c.squaredNorm() +
+                                                             e_.hole_r * e_.hole_r));
+    const double t = t1 + std::max(0.0, to_rim - e_.radius) / v1n;
+    const double drop = 0.5 * g * t * t;
+    holed = drop >= e_.radius || v1n * v1n <= 2.0 * g * drop;
+    // Out: over the hole it flies (no friction, the spin kept), and goes on from the rim.
+    exit = c + to_rim * u;
+    t_exit = t1 + to_rim / v1n;
+  }
+  b_ = Ball{e_.hole_c + c + e_.radius * e_.n, v1, entry.w};
+  t_ = te + t1;
+  if (holed) return Rim::kHoled;
+  Emit(GroundEventKind::kLipOut);
+  b_.c = e_.hole_c + exit + e_.radius * e_.n;
+  t_ = te + t_exit;
+  return Rim::kDeflected;
 }
 
 // The skid and the roll on the plane, to rest or into the hole.
@@ -278,7 +329,7 @@ absl::Status Run::OnPlane() {
   // The slip of the contact point (tangential: the ball is on the plane).
   Vector3d s = b_.v + b_.w.cross(-e_.radius * n);
   s -= s.dot(n) * n;
-  const double w_normal = b_.w.dot(n);  // spin about the normal: friction does not change it
+  double w_normal = b_.w.dot(n);  // spin about the normal: friction does not change it
   auto spin_of = [&](const Vector3d& v, const Vector3d& slip) {
     return Vector3d(w_normal * n + n.cross(v - slip) / e_.radius);
   };
@@ -353,9 +404,17 @@ absl::Status Run::OnPlane() {
     t_ = t0 + step;
     ++result_.steps;
     SampleSegment(t0, t_, from, b_);
-    if (CrossHole(t0, step, from, b_)) {
-      holed_ = true;
-      return absl::OkStatus();
+    switch (CrossHole(t0, step, from, b_)) {
+      case Rim::kNone: break;
+      case Rim::kHoled: holed_ = true; return absl::OkStatus();
+      case Rim::kDeflected:
+        // Off the flagstick: the new velocity with the old spin slips.
+        s = b_.v + b_.w.cross(-e_.radius * n);
+        s -= s.dot(n) * n;
+        w_normal = b_.w.dot(n);
+        rolling = s.norm() <= 1e-12;
+        if (rolling) s.setZero();
+        continue;
     }
     if (!transition) continue;
     if (!rolling) {
@@ -441,7 +500,8 @@ Vector3d GroundPlane::Normal() const {
 
 double GroundPlane::HeightAt(double x, double y) const {
   const double d = slope_toward_deg * kPi / 180.0;
-  return -(slope_pct / 100.0) * (x * std::cos(d) + y * std::sin(d));
+  const double z = -(slope_pct / 100.0) * (x * std::cos(d) + y * std::sin(d));
+  return z == 0.0 ? 0.0 : z;  // never -0
 }
 
 GroundStart LandingFromFlight(const FlightResult& flight) {
@@ -528,6 +588,15 @@ absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
         !s.ok()) {
       return s;
     }
+    if (hole.flagstick_diameter_m != 0.0) {
+      if (absl::Status s = CheckFieldsInRange(
+              {{"hole.flagstick_diameter_m", hole.flagstick_diameter_m, 0.005, false,
+                0.5 * hole.diameter_m},
+               {"hole.flagstick_restitution", hole.flagstick_restitution, 0, false, 1}});
+          !s.ok()) {
+        return absl::InvalidArgumentError(absl::StrCat(s.message(), " (or 0: the flagstick out)"));
+      }
+    }
     for (const auto& [name, v] : {std::pair{"hole.x_m", hole.x_m}, {"hole.y_m", hole.y_m}}) {
       if (absl::Status s = CheckFiniteInRange(name, v, -1e5, false, 1e5, false); !s.ok()) {
         return s;
@@ -597,6 +666,8 @@ absl::StatusOr<GroundResult> SimulateGround(const BallSpec& ball, const Surface&
   env.hole = options.hole;
   env.hole_c = PlanePoint(plane, hole.x_m, hole.y_m);
   env.hole_r = 0.5 * hole.diameter_m;
+  env.stick_r = 0.5 * hole.flagstick_diameter_m;
+  env.stick_e = hole.flagstick_restitution;
   Run run(env, surface, options);
   return run.Go(start, plane);
 }

@@ -41,6 +41,15 @@
 //    Am. J. Phys. 59, 129 (1991); on the centre line v_c = 1.31 m/s, Holmes' figure). A faster
 //    ball crosses: a lip_out event, and it goes on unchanged. A hop that lands with the whole
 //    ball inside the rim (centre within r_h - R of the hole's centre) is holed.
+//    With the flagstick in, a crossing ball whose line passes within r_s + R of the centre
+//    meets the stick (a vertical cylinder; the normal velocity reverses with
+//    flagstick_restitution), unsupported since the near rim: it drops if, by the time its
+//    leading side reaches the rim again, it has fallen its radius or has too little speed to
+//    climb back over the drop (v^2 < 2 g d); otherwise it bounces out (lip_out) and goes on
+//    from the stick. A ball at rest against the stick rests over the hole: holed (Rule 13.2c).
+//    The restitution is an estimate (0.1): a flagstick is a rod held loosely in a ferrule and
+//    gives; putting tests at the flagstick (Pelz, 2019) found it keeps more putts in than it
+//    knocks out, which a lively stick would not. We know no measurement of it.
 //
 // Integration: without a pull along the plane (flat, or the slope switched off) the skid and
 // the roll are each at constant acceleration in a fixed direction and are solved exactly, one
@@ -90,7 +99,14 @@ struct Hole {
   double x_m = 0.0, y_m = 0.0;  ///< its centre (m)
   double diameter_m = 0.108;    ///< (m); (ball diameter, 1]
   double depth_m = 0.1016;      ///< (m); (0, 1]
+  /// The flagstick, centred in the hole: 0 when it is out; in, its diameter at the hole (m),
+  /// [0.005, diameter_m / 2]. kFlagstickDiameter is the USGA's recommended largest.
+  double flagstick_diameter_m = 0.0;
+  /// Normal restitution of the ball against the flagstick; [0, 1]. An estimate (see above).
+  double flagstick_restitution = 0.1;
 };
+/// 3/4 inch: the USGA's recommended largest flagstick diameter near the hole.
+inline constexpr double kFlagstickDiameter = 0.01905;
 
 /// How the ball meets the ground.
 enum class GroundStartKind {

@@ -1,8 +1,8 @@
-// Golf: the ground phase (sim/golf/ground.h) with the surface, plane, hole, start (a landing, a
-// putt or a rolling ball) and options decoded from the bytes within and slightly beyond their
-// valid ranges (plus NaN, infinities, zeros). The validator must refuse invalid inputs cleanly
-// (InvalidArgument, short messages); a run is cut off through its cancellation poll (a few
-// hundred thousand steps) or its time limit (OutOfRange). An accepted run must end holed or at
+// Golf: the ground phase (sim/golf/ground.h) with the surface, plane, hole (and flagstick),
+// start (a landing, a putt or a rolling ball) and options decoded from the bytes within and
+// slightly beyond their valid ranges (plus NaN, infinities, zeros). The validator must refuse
+// invalid inputs cleanly (InvalidArgument, short messages); a run is cut off through its
+// cancellation poll (a few hundred thousand steps) or its time limit (OutOfRange). An accepted run must end holed or at
 // rest on the plane, with finite events in time order and samples never below the plane, and
 // give bit-identical results twice.
 #include <fuzzer/FuzzedDataProvider.h>
@@ -52,6 +52,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (in.ConsumeIntegralInRange(0, 7) == 0) {
     hole.diameter_m = RangeValue(in, 0.04, 0.3);
     hole.depth_m = RangeValue(in, 0, 0.2);
+  }
+  if (in.ConsumeBool()) {
+    hole.flagstick_diameter_m = RangeValue(in, 0.005, 0.06);
+    hole.flagstick_restitution = RangeValue(in, 0, 1);
   }
   g::GroundOptions o;
   o.hole = in.ConsumeBool();

@@ -146,7 +146,9 @@ TEST_F(AbuseTest, BatchesNobodyReadsStopAtTheirWindowAndHoldLittleMemory) {
   std::printf("8 batches unread for 10 s: resident memory grew %.1f MB (peak %.1f MB)\n",
               grown_mb, static_cast<double>(peak) / (1 << 20));
   if (!kAsan) {
-    EXPECT_LT(grown_mb, 48.0) << "finished chunks pile up behind the unread stream";
+    // Measured 36 MB in a release build (2 cores): mostly gRPC's flow-control windows, whose
+    // growth varies; before the window, one such client grew the server by 3.5 GB.
+    EXPECT_LT(grown_mb, 64.0) << "finished chunks pile up behind the unread stream";
   }
   // The batches wait for their readers: nothing computes.
   EXPECT_TRUE(Eventually([&] { return PoolIdle(); }, 5))

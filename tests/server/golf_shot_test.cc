@@ -59,6 +59,10 @@ TEST(GolfShotTest, BadRequestsNameTheirField) {
   r = Putt(2, 0);
   r.set_aim_deg(10);
   EXPECT_THAT(Error(r), HasSubstr("aim_deg"));
+  r = Putt(2, 0);
+  r.set_course("range");
+  r.set_flagstick(true);
+  EXPECT_THAT(Error(r), HasSubstr("flagstick"));
   v1::SimulateGolfShotRequest none;
   EXPECT_THAT(Error(none), HasSubstr("shot"));
   v1::SimulateGolfShotRequest launch;
@@ -109,6 +113,15 @@ TEST(GolfShotTest, APuttIsTheLibrarysPuttAndTheHoleTakesIt) {
   EXPECT_TRUE(in.rest().holed());
   EXPECT_EQ(in.rest().distance_to_pin_m(), 0.0);
   EXPECT_EQ(in.events(in.events_size() - 1).kind(), "holed");
+
+  // 1.8 m/s at the rim: over the open hole, into the flagstick.
+  holed.mutable_roll()->set_speed_mps(std::sqrt(1.8 * 1.8 + 2 * a * (3 - 0.054)));
+  v1::SimulateGolfShotResponse open, stick;
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(holed), {}, &open).ok());
+  holed.set_flagstick(true);
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(holed), {}, &stick).ok());
+  EXPECT_FALSE(open.rest().holed());
+  EXPECT_TRUE(stick.rest().holed());
 }
 
 // A launch on the range: the flight's carry, then the ground; the frame turns with the aim (a

@@ -250,6 +250,52 @@ TEST(GroundTest, TheHoleCapturesBelowItsSpeedAndLipsOutAbove) {
   EXPECT_TRUE(hang.holed);
 }
 
+// The flagstick in: a ball straight at it, too fast for the open hole (1.8 m/s at the rim,
+// above the 1.31 m/s capture speed), is stopped by the stick and drops (at 0.1 restitution it
+// leaves the stick at 0.18 m/s and has fallen 2.4 mm when it is back at the rim, more than
+// v^2 / 2g = 1.7 mm: it cannot climb out); a very fast one (4 m/s) bounces out; one whose line misses
+// the stick runs on as with the stick out; a glancing hit at speed is knocked off its line
+// and bounces out. A ball that stops against the stick is over the hole: holed.
+TEST(GroundTest, TheFlagstickStopsFastBallsItMeets) {
+  const Surface green = *GreenOfStimp(10);
+  const double a = 5.0 / 7.0 * green.rolling_resistance * kG;
+  const double rh = 0.054, rb = BallSpec{}.radius_m();
+  Hole in;
+  in.flagstick_diameter_m = kFlagstickDiameter;
+  auto roll = [&](double offset, double v_rim, const Hole& hole) {
+    const double entry = 3.0 - std::sqrt(rh * rh - offset * offset);
+    const double v0 = std::sqrt(v_rim * v_rim + 2 * a * entry);
+    return MustRun(green, {}, RollingStart(-3, offset, v0, 0), GroundOptions{}, hole);
+  };
+  EXPECT_FALSE(roll(0.0, 1.8, Hole{}).holed);
+  EXPECT_TRUE(roll(0.0, 1.8, in).holed);
+  const GroundResult fast = roll(0.0, 4.0, in);
+  EXPECT_FALSE(fast.holed);
+  EXPECT_EQ(Count(fast, GroundEventKind::kLipOut), 1);
+  const GroundEvent* off = First(fast, GroundEventKind::kLipOut);
+  EXPECT_LT(off->velocity_mps.x(), 0.0) << "bounced back off the stick";
+  EXPECT_NEAR(off->velocity_mps.norm(), 0.4, 1e-9);  // 0.1 of 4 m/s, head-on
+  // Outside r_s + R of the centre the stick is not met: the same run to the bit.
+  const double miss = 0.5 * kFlagstickDiameter + rb + 0.002;
+  const GroundResult open = roll(miss, 2.0, Hole{});
+  const GroundResult stick = roll(miss, 2.0, in);
+  EXPECT_FALSE(stick.holed);
+  EXPECT_EQ(open.rest_m, stick.rest_m);
+  // A glancing hit at 4 m/s: deflected, out, off its line.
+  const GroundResult glance = roll(0.5 * kFlagstickDiameter + rb - 0.002, 4.0, in);
+  EXPECT_FALSE(glance.holed);
+  EXPECT_EQ(Count(glance, GroundEventKind::kLipOut), 1);
+  EXPECT_GT(std::abs(glance.rest_m.y() - (0.5 * kFlagstickDiameter + rb - 0.002)), 0.05);
+  // A slow ball that reaches the stick drops (it was over the hole).
+  EXPECT_TRUE(roll(0.0, 0.2, in).holed);
+  // The stick's size is checked.
+  Hole fat = in;
+  fat.flagstick_diameter_m = 0.08;
+  EXPECT_FALSE(SimulateGround(BallSpec{}, green, {}, fat, RollingStart(-3, 0, 1, 0),
+                              GroundOptions{})
+                   .ok());
+}
+
 // A ball landing with the whole ball inside the rim is holed at once.
 TEST(GroundTest, ALandingInsideTheRimIsHoled) {
   const Surface green = *GreenOfStimp(10);
