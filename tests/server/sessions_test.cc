@@ -621,6 +621,10 @@ TEST_F(SessionsTest, RefusedCommandsAreReportedAndChangeNothing) {
     EXPECT_THAT(refused[i].reason(), HasSubstr(expected[i].reason));
     EXPECT_EQ(refused[i].swing_id(), 1u);
   }
+  // The NaN is named in the reason, never echoed as a number; the finite values are.
+  EXPECT_EQ(refused[0].qalpha_nm(), 0.0);
+  EXPECT_EQ(refused[0].qbeta_nm(), -10.0);
+  EXPECT_EQ(refused[0].command_t_s(), 0.25);
   const std::vector<v1::SwingEvent> torques = EventsOf(got, v1::SWING_EVENT_TORQUE);
   ASSERT_EQ(torques.size(), 1u);
   EXPECT_EQ(torques[0].command(), 5u);
