@@ -1,7 +1,7 @@
 // CPU of the golf ball's ground phase per shot beside its flight's: a tour drive and a tour
 // 7-iron (flight, then bounces and roll on the normal fairway), and putts of 3 and 10 m on a
-// Stimp 10 green, flat and across a 2 % slope (RK4 on the ground at 1, 2 and 5 ms; a flat
-// green needs no steps). Flights at their default (RK4, 1 ms), no samples. Results:
+// Stimp 10 green, flat and across a 2 % slope (RK4 on the ground at 1, 2 and 5 ms, the
+// default; a flat green needs no steps). Flights at their default (RK4, 1 ms), no samples. Results:
 // docs/golf-ground.md.
 #include <benchmark/benchmark.h>
 

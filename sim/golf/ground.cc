@@ -22,6 +22,9 @@ using Eigen::Vector3d;
 constexpr double kPi = std::numbers::pi;
 // The steepest plane (%): a putting surface or a fairway, not a wall.
 constexpr double kMaxSlopePct = 20.0;
+// The last piece before a slip or a roll ends, taken at constant acceleration (s): the steps
+// before it shrink toward the end (OnPlane).
+constexpr double kLastPiece = 1e-4;
 // The most path samples a run may ask for (max_time_s / sample_interval_s).
 constexpr double kMaxSamples = 1e6;
 // Impacts before the bouncing is ended by force (each impact at most keeps 0.765 of the normal
@@ -345,7 +348,12 @@ absl::Status Run::OnPlane() {
     if (!rolling) {
       const Vector3d sh = s / s.norm();
       const double r = rate_slip - e_.g_t.dot(sh);
-      if (r > 0.0 && s.norm() <= r * h) {
+      // Near its end the slip's direction turns ever faster (the slope's pull against a
+      // vanishing slip): the steps shrink with the time left, half of it each, so each turns
+      // the direction by a bounded angle, until the last piece is short.
+      const double left = r > 0.0 ? s.norm() / r : h;
+      const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
+      if (r > 0.0 && s.norm() <= r * hs) {
         // The slip ends inside this step. v - k/(1+k) s moves at the constant rate g_t/(1+k)
         // (the friction terms cancel), so the velocity at the end of the slip is exact whatever
         // path the slip's direction takes on the way to zero; the position takes the slip as
@@ -366,19 +374,23 @@ absl::Status Run::OnPlane() {
           const Vector3d u = Unit(sl, Vector3d::Zero());
           return D{v, e_.g_t - e_.mu * e_.g_n * u, e_.g_t - rate_slip * u};
         };
+        step = hs;
         const D k1 = f(b_.v, s);
-        const D k2 = f(b_.v + 0.5 * h * k1.v, s + 0.5 * h * k1.s);
-        const D k3 = f(b_.v + 0.5 * h * k2.v, s + 0.5 * h * k2.s);
-        const D k4 = f(b_.v + h * k3.v, s + h * k3.s);
-        b_.c += (h / 6.0) * (k1.c + 2.0 * k2.c + 2.0 * k3.c + k4.c);
-        b_.v += (h / 6.0) * (k1.v + 2.0 * k2.v + 2.0 * k3.v + k4.v);
-        s += (h / 6.0) * (k1.s + 2.0 * k2.s + 2.0 * k3.s + k4.s);
+        const D k2 = f(b_.v + 0.5 * hs * k1.v, s + 0.5 * hs * k1.s);
+        const D k3 = f(b_.v + 0.5 * hs * k2.v, s + 0.5 * hs * k2.s);
+        const D k4 = f(b_.v + hs * k3.v, s + hs * k3.s);
+        b_.c += (hs / 6.0) * (k1.c + 2.0 * k2.c + 2.0 * k3.c + k4.c);
+        b_.v += (hs / 6.0) * (k1.v + 2.0 * k2.v + 2.0 * k3.v + k4.v);
+        s += (hs / 6.0) * (k1.s + 2.0 * k2.s + 2.0 * k3.s + k4.s);
       }
     } else {
       const double speed = b_.v.norm();
       const Vector3d vh = Unit(b_.v, Unit(e_.g_t, e_.fall));
       const double r = (hold - e_.g_t.dot(vh)) / (1.0 + e_.k);
-      if (r > 0.0 && speed <= r * h) {
+      // As for the slip: the path hooks down the slope ever tighter as the ball stops.
+      const double left = r > 0.0 ? speed / r : h;
+      const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
+      if (r > 0.0 && speed <= r * hs) {
         step = speed / r;
         const Vector3d a = (e_.g_t - hold * vh) / (1.0 + e_.k);
         b_.c += b_.v * step + 0.5 * step * step * a;
@@ -388,13 +400,14 @@ absl::Status Run::OnPlane() {
         auto acc = [&](const Vector3d& v) {
           return Vector3d((e_.g_t - hold * Unit(v, vh)) / (1.0 + e_.k));
         };
+        step = hs;
         const Vector3d k1 = acc(b_.v);
-        const Vector3d k2 = acc(b_.v + 0.5 * h * k1);
-        const Vector3d k3 = acc(b_.v + 0.5 * h * k2);
-        const Vector3d k4 = acc(b_.v + h * k3);
+        const Vector3d k2 = acc(b_.v + 0.5 * hs * k1);
+        const Vector3d k3 = acc(b_.v + 0.5 * hs * k2);
+        const Vector3d k4 = acc(b_.v + hs * k3);
         const Vector3d v0 = b_.v;
-        b_.c += h * v0 + (h * h / 6.0) * (k1 + k2 + k3);
-        b_.v += (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        b_.c += hs * v0 + (hs * hs / 6.0) * (k1 + k2 + k3);
+        b_.v += (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
       }
     }
     // Keep the centre on the plane against rounding.

@@ -53,10 +53,11 @@
 //
 // Integration: without a pull along the plane (flat, or the slope switched off) the skid and
 // the roll are each at constant acceleration in a fixed direction and are solved exactly, one
-// piece each. Otherwise they are integrated by classical RK4 at the fixed step dt_s, except that
-// a step in which the slip or the speed would reach zero is cut at that instant (the slip's end
-// exactly through the invariant v - k/(1+k) s, the roll's last piece at constant acceleration),
-// so the transitions and the rest are located, not stepped over. Along the fall line the result
+// piece each. Otherwise they are integrated by classical RK4 at the fixed step dt_s; near the
+// slip's or the roll's end, where the direction turns ever faster, the steps halve with the
+// time left until a last piece of 0.1 ms, which is cut at the zero (the slip's end exactly
+// through the invariant v - k/(1+k) s, the roll's at constant acceleration): the transitions
+// and the rest are located, not stepped over. Along the fall line the result
 // is exact to rounding; across a slope the rest converges with the step (docs/golf-ground.md).
 // The rim's crossing and the path's samples are taken on each step's cubic Hermite
 // interpolant.
@@ -134,7 +135,7 @@ GroundStart RollingStart(double x_m, double y_m, double speed_mps, double direct
 
 struct GroundOptions {
   double gravity_mps2 = 9.80665;   ///< (m/s^2); (0, 100]
-  double dt_s = 1e-3;              ///< RK4 step on the plane (s); (0, 0.01]
+  double dt_s = 5e-3;              ///< RK4 step on the plane (s); [1e-6, 0.01]
   double sample_interval_s = 0.02; ///< path samples (s); 0 = none, else [0.001, 10] and at
                                    ///< most 1e6 of them in max_time_s
   double max_time_s = 300.0;       ///< give up after (s, from the start); (0, 3600]
