@@ -338,7 +338,7 @@ std::vector<CommandSpec> MakeSpecs() {
               {"roll_speed", "a ball already rolling (as off a Stimpmeter), [0, 15] m/s"},
               {"roll_direction_deg", "the rolling ball's heading (deg, ccw from +x; default 0)"}},
              AirFlags(),
-             {{"disable", "ground effects to switch off: ground_spin"},
+             {{"disable", "ground effects to switch off: ground_spin, ground_slope"},
               {"svg", "the path from above, with the hole, bounces and rest"}}}),
        /*series=*/true, /*stream=*/false, flight_refusals},
   };

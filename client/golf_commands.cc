@@ -100,7 +100,8 @@ std::optional<std::string> BuildRequest(v1::SimulateGolfShotRequest* r) {
   }
   for (const std::string& e : absl::GetFlag(FLAGS_disable)) {
     if (e == "ground_spin") r->set_no_spin(true);
-    else return "--disable for golf takes ground_spin; got '" + e.substr(0, 40) + "'";
+    else if (e == "ground_slope") r->set_no_slope(true);
+    else return "--disable for golf takes ground_spin, ground_slope; got '" + e.substr(0, 40) + "'";
   }
   return std::nullopt;
 }

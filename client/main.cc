@@ -68,7 +68,8 @@ Commands:
       MPS --launch-deg DEG --spin-rpm RPM [--spin-axis-deg DEG] [--launch-direction-deg DEG]
       [--aim-deg DEG] [air flags of flight simulate]), a putt (--putt-speed MPS
       [--putt-direction-deg DEG]) or a rolling ball (--roll-speed MPS [--roll-direction-deg
-      DEG]); [--disable ground_spin] [--sample-interval S] [--svg FILE] (the path from above)
+      DEG]); [--disable ground_spin,ground_slope] [--sample-interval S] [--svg FILE] (the path
+      from above)
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
       --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
       [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]

@@ -69,7 +69,7 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
       return s;
     }
     job.plane = {.slope_pct = r.slope_pct(), .slope_toward_deg = r.slope_toward_deg()};
-    if (r.slope_pct() / 100.0 > job.surface.rolling_resistance) {
+    if (!r.no_slope() && r.slope_pct() / 100.0 > job.surface.rolling_resistance) {
       return absl::InvalidArgumentError(absl::StrFormat(
           "slope_pct: %g %% is steeper than a Stimp %g green holds a ball at rest (at most "
           "%.3g %%): the ball would never stop",
@@ -113,6 +113,7 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
   }
   job.ground.hole = job.has_hole;
   if (r.no_spin()) job.ground.effects |= golf::kGroundDisableSpin;
+  if (r.no_slope()) job.ground.effects |= golf::kGroundDisableSlope;
   if (r.has_sample_interval_s()) {
     if (absl::Status s = Field("sample_interval_s", r.sample_interval_s(), 1e-3, 10); !s.ok()) {
       return s;

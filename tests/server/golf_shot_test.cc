@@ -122,6 +122,27 @@ TEST(GolfShotTest, APuttIsTheLibrarysPuttAndTheHoleTakesIt) {
   ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(holed), {}, &stick).ok());
   EXPECT_FALSE(open.rest().holed());
   EXPECT_TRUE(stick.rest().holed());
+
+  // The slope switched off: a putt across a tilted green runs as on the flat (the plane keeps
+  // its tilt, so only the heights differ), and a slope the green could not hold is accepted.
+  v1::SimulateGolfShotRequest across = Putt(2.0, 90);
+  across.set_from_x_m(-3);
+  across.set_from_y_m(-2);
+  across.set_slope_pct(9);
+  across.set_slope_toward_deg(0);
+  EXPECT_THAT(Error(across), HasSubstr("slope_pct"));
+  across.set_no_slope(true);
+  v1::SimulateGolfShotResponse flat_run, tilted;
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(across), {}, &tilted).ok());
+  across.set_slope_pct(0);
+  across.set_no_slope(false);
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(across), {}, &flat_run).ok());
+  EXPECT_NEAR(tilted.rest().x_m(), flat_run.rest().x_m(), 1e-9);
+  EXPECT_GT(tilted.total_m(), 1.0);
+  across.set_slope_pct(5);  // with the pull: it breaks down the fall line (+x)
+  v1::SimulateGolfShotResponse breaking;
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(across), {}, &breaking).ok());
+  EXPECT_GT(breaking.rest().x_m(), flat_run.rest().x_m() + 0.05);
 }
 
 // A launch on the range: the flight's carry, then the ground; the frame turns with the aim (a
