@@ -227,8 +227,7 @@ absl::StatusOr<std::optional<golf::Surface>> FairwayFromProto(std::string_view f
                                          : "";
   if (name.empty()) {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "%s must be firm, normal or soft (or empty: no roll-out); got \"%s\"", field,
-        f.substr(0, 40)));
+        "%s must be firm, normal or soft (or empty: no roll-out); got %s", field, Quote(f)));
   }
   return std::optional<golf::Surface>(*golf::SurfaceByName(name));
 }

@@ -58,7 +58,7 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
   const bool practice = course.empty() || course == "practice";
   if (!practice && course != "range") {
     return absl::InvalidArgumentError(absl::StrFormat(
-        "course must be practice or range; got \"%s\"", course.substr(0, 40)));
+        "course must be practice or range; got %s", Quote(course)));
   }
   if (practice) {
     absl::StatusOr<golf::Surface> green = golf::GreenOfStimp(r.has_stimp_ft() ? r.stimp_ft() : 10);
@@ -94,7 +94,7 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
                                                         : "";
     if (name.empty()) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "fairway must be firm, normal or soft; got \"%s\"", f.substr(0, 40)));
+          "fairway must be firm, normal or soft; got %s", Quote(f)));
     }
     job.surface = *golf::SurfaceByName(name);
   }

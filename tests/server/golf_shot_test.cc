@@ -56,6 +56,11 @@ TEST(GolfShotTest, BadRequestsNameTheirField) {
   r.set_course("range");
   r.set_fairway("icy");
   EXPECT_THAT(Error(r), HasSubstr("fairway"));
+  r.set_course(std::string("x\n\x01y", 4) + std::string(100, 'z'));  // quoted short and clean
+  const std::string quoted = Error(r);
+  EXPECT_THAT(quoted, HasSubstr("course"));
+  EXPECT_LT(quoted.size(), 120u);
+  EXPECT_EQ(quoted.find('\n'), std::string::npos);
   r = Putt(2, 0);
   r.set_aim_deg(10);
   EXPECT_THAT(Error(r), HasSubstr("aim_deg"));
