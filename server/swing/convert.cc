@@ -245,23 +245,28 @@ absl::Status RollOutToProto(const FlightJob& job, const golf::FlightResult& flig
   if (!g.ok()) return g.status();
   out->set_total_m(std::hypot(g->rest_m.x(), g->rest_m.y()));
   out->set_total_lateral_m(-g->rest_m.y());
-  v1::GolfRest* rest = out->mutable_rest();
-  rest->set_x_m(g->rest_m.x());
-  rest->set_y_m(g->rest_m.y());
-  rest->set_z_m(g->rest_m.z());
-  rest->set_surface(job.fairway->name);
-  rest->set_holed(false);
-  for (const golf::GroundEvent& e : g->events) {
-    v1::GolfEvent* ev = out->add_ground_events();
-    ev->set_t_s(e.t_s);
-    ev->set_kind(std::string(golf::GroundEventName(e.kind)));
-    ev->set_x_m(e.position_m.x());
-    ev->set_y_m(e.position_m.y());
-    ev->set_z_m(e.position_m.z());
-    ev->set_speed_mps(e.velocity_mps.norm());
-    ev->set_spin_rpm(e.spin_radps / golf::kRpmToRadPerS);
-  }
+  GroundRestToProto(*g, job.fairway->name, out->mutable_rest());
+  for (const golf::GroundEvent& e : g->events) GroundEventToProto(e, out->add_ground_events());
   return absl::OkStatus();
+}
+
+void GroundEventToProto(const golf::GroundEvent& e, v1::GolfEvent* out) {
+  out->set_t_s(e.t_s);
+  out->set_kind(std::string(golf::GroundEventName(e.kind)));
+  out->set_x_m(e.position_m.x());
+  out->set_y_m(e.position_m.y());
+  out->set_z_m(e.position_m.z());
+  out->set_speed_mps(e.velocity_mps.norm());
+  out->set_spin_rpm(e.spin_radps / golf::kRpmToRadPerS);
+}
+
+void GroundRestToProto(const golf::GroundResult& g, const std::string& surface,
+                       v1::GolfRest* out) {
+  out->set_x_m(g.rest_m.x());
+  out->set_y_m(g.rest_m.y());
+  out->set_z_m(g.rest_m.z());
+  out->set_surface(surface);
+  out->set_holed(g.holed);
 }
 
 absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& r) {

@@ -73,6 +73,10 @@ void SwingResultToProto(const swing::SwingRunResult& result, double cpu_s,
 absl::StatusOr<FlightJob> FlightJobFromProto(const v1::SimulateFlightRequest& request);
 void FlightResultToProto(const golf::FlightResult& result, double cpu_s,
                          v1::SimulateFlightResponse* out);
+/// A ground event and a rest as the wire carries them (SimulateGolfShot, a flight's roll-out).
+void GroundEventToProto(const golf::GroundEvent& e, v1::GolfEvent* out);
+void GroundRestToProto(const golf::GroundResult& g, const std::string& surface,
+                       v1::GolfRest* out);
 /// `fairway` ("", firm, normal, soft) -> the surface, nullopt for ""; errors name `field`.
 absl::StatusOr<std::optional<golf::Surface>> FairwayFromProto(std::string_view field,
                                                              const std::string& fairway);

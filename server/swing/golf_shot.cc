@@ -30,18 +30,6 @@ absl::Status Field(std::string_view name, double value, double lo, double hi) {
   return CheckFiniteInRange(name, value, lo, false, hi, false);
 }
 
-void AddEvent(double t, std::string_view kind, const Vector3d& p, double speed, double spin_rpm,
-              v1::SimulateGolfShotResponse* out) {
-  v1::GolfEvent* e = out->add_events();
-  e->set_t_s(t);
-  e->set_kind(std::string(kind));
-  e->set_x_m(p.x());
-  e->set_y_m(p.y());
-  e->set_z_m(p.z());
-  e->set_speed_mps(speed);
-  e->set_spin_rpm(spin_rpm);
-}
-
 void AddPoint(double t, const Vector3d& p, v1::SimulateGolfShotResponse* out) {
   v1::GolfPathPoint* q = out->add_path();
   q->set_t_s(t);
@@ -87,16 +75,10 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
           "stimp_ft, slope_pct, slope_toward_deg, flagstick: the range is a flat fairway "
           "without a hole (they set the practice green)");
     }
-    const std::string& f = r.fairway();
-    const std::string name = f.empty() || f == "normal" ? "fairway"
-                             : f == "firm"              ? "fairway_firm"
-                             : f == "soft"              ? "fairway_soft"
-                                                        : "";
-    if (name.empty()) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "fairway must be firm, normal or soft; got %s", Quote(f)));
-    }
-    job.surface = *golf::SurfaceByName(name);
+    absl::StatusOr<std::optional<golf::Surface>> fairway =
+        FairwayFromProto("fairway", r.fairway().empty() ? "normal" : r.fairway());
+    if (!fairway.ok()) return fairway.status();
+    job.surface = **fairway;
   }
   job.from_x_m = r.has_from_x_m() ? r.from_x_m() : (practice ? kPracticeFromX : 0.0);
   job.from_y_m = r.has_from_y_m() ? r.from_y_m() : 0.0;
@@ -210,10 +192,7 @@ absl::Status RunGolfShot(const GolfShotJob& job, const std::function<bool()>& ca
     return g.status();
   }
   for (const golf::GroundSample& s : g->samples) AddPoint(s.t_s, s.position_m, out);
-  for (const golf::GroundEvent& e : g->events) {
-    AddEvent(e.t_s, golf::GroundEventName(e.kind), e.position_m, e.velocity_mps.norm(),
-             e.spin_radps / golf::kRpmToRadPerS, out);
-  }
+  for (const golf::GroundEvent& e : g->events) GroundEventToProto(e, out->add_events());
   const Vector3d d = g->rest_m - from;
   const double aim = job.aim_deg * kDeg;
   out->set_carry_m(carry);
@@ -223,11 +202,7 @@ absl::Status RunGolfShot(const GolfShotJob& job, const std::function<bool()>& ca
   out->set_t_rest_s(g->t_rest_s);
   out->set_bounces(static_cast<uint32_t>(g->bounces));
   v1::GolfRest* rest = out->mutable_rest();
-  rest->set_x_m(g->rest_m.x());
-  rest->set_y_m(g->rest_m.y());
-  rest->set_z_m(g->rest_m.z());
-  rest->set_surface(job.surface.name);
-  rest->set_holed(g->holed);
+  GroundRestToProto(*g, job.surface.name, rest);
   if (job.has_hole) {
     rest->set_distance_to_pin_m(
         g->holed ? 0.0 : std::hypot(g->rest_m.x() - job.hole.x_m, g->rest_m.y() - job.hole.y_m));
