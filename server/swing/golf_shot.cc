@@ -57,11 +57,8 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
       return s;
     }
     job.plane = {.slope_pct = r.slope_pct(), .slope_toward_deg = r.slope_toward_deg()};
-    if (!r.no_slope() && r.slope_pct() / 100.0 > job.surface.rolling_resistance) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "slope_pct: %g %% is steeper than a Stimp %g green holds a ball at rest (at most "
-          "%.3g %%): the ball would never stop",
-          r.slope_pct(), job.surface.stimp_ft(), 100.0 * job.surface.rolling_resistance));
+    if (!r.no_slope()) {
+      if (absl::Status s = golf::CheckSlopeHolds(job.plane, job.surface); !s.ok()) return s;
     }
     job.has_hole = true;
     if (r.flagstick()) job.hole.flagstick_diameter_m = golf::kFlagstickDiameter;

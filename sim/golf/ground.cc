@@ -88,12 +88,13 @@ class Run {
 
  private:
   Vector3d Contact(const Vector3d& centre) const { return centre - e_.radius * e_.n; }
-  void Emit(GroundEventKind kind) {
-    result_.events.push_back(GroundEvent{.t_s = t_,
+  void Emit(GroundEventKind kind) { EmitAt(kind, b_, t_); }
+  void EmitAt(GroundEventKind kind, const Ball& ball, double t) {
+    result_.events.push_back(GroundEvent{.t_s = t,
                                          .kind = kind,
-                                         .position_m = Contact(b_.c),
-                                         .velocity_mps = b_.v,
-                                         .spin_radps = b_.w.norm()});
+                                         .position_m = Contact(ball.c),
+                                         .velocity_mps = ball.v,
+                                         .spin_radps = ball.w.norm()});
   }
   void Sample(double t, const Vector3d& centre, double speed) {
     result_.samples.push_back(GroundSample{.t_s = t, .position_m = Contact(centre),
@@ -269,13 +270,7 @@ Run::Rim Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
     in_rim_ = true;
     return HitFlagstick(entry, de, dir, offset, te);
   }
-  const Ball keep = b_;
-  const double keep_t = t_;
-  b_ = entry;
-  t_ = te;
-  Emit(GroundEventKind::kLipOut);
-  b_ = keep;
-  t_ = keep_t;
+  EmitAt(GroundEventKind::kLipOut, entry, te);
   in_rim_ = true;
   return Rim::kNone;
 }
@@ -329,15 +324,23 @@ absl::Status Run::OnPlane() {
   const bool straight = e_.g_t.squaredNorm() == 0.0;
   const double h = straight ? options_.max_time_s : options_.dt_s;
   const double rate_slip = e_.mu * e_.g_n * (1.0 + 1.0 / e_.k);
-  // The slip of the contact point (tangential: the ball is on the plane).
-  Vector3d s = b_.v + b_.w.cross(-e_.radius * n);
-  s -= s.dot(n) * n;
-  double w_normal = b_.w.dot(n);  // spin about the normal: friction does not change it
+  // The slip of the contact point (tangential: the ball is on the plane) and the spin about the
+  // normal (friction does not change it), from the ball as it is now: here, and after the
+  // flagstick.
+  Vector3d s;
+  double w_normal = 0.0;
+  bool rolling = false;
+  auto take_ball = [&] {
+    s = b_.v + b_.w.cross(-e_.radius * n);
+    s -= s.dot(n) * n;
+    w_normal = b_.w.dot(n);
+    rolling = s.norm() <= 1e-12;
+    if (rolling) s.setZero();
+  };
+  take_ball();
   auto spin_of = [&](const Vector3d& v, const Vector3d& slip) {
     return Vector3d(w_normal * n + n.cross(v - slip) / e_.radius);
   };
-  bool rolling = s.norm() <= 1e-12;
-  if (rolling) s.setZero();
   const double hold = e_.rho * e_.g_n;  // the most the resistance holds at rest
   for (;;) {
     if (absl::Status st = Poll(); !st.ok()) return st;
@@ -421,12 +424,7 @@ absl::Status Run::OnPlane() {
       case Rim::kNone: break;
       case Rim::kHoled: holed_ = true; return absl::OkStatus();
       case Rim::kDeflected:
-        // Off the flagstick: the new velocity with the old spin slips.
-        s = b_.v + b_.w.cross(-e_.radius * n);
-        s -= s.dot(n) * n;
-        w_normal = b_.w.dot(n);
-        rolling = s.norm() <= 1e-12;
-        if (rolling) s.setZero();
+        take_ball();  // off the flagstick: the new velocity with the old spin slips
         continue;
     }
     if (!transition) continue;
@@ -556,6 +554,14 @@ double HoleCaptureSpeed(double hole_radius, double ball_radius, double offset, d
   return std::max(0.0, (chord - ball_radius) * std::sqrt(g / (2.0 * ball_radius)));
 }
 
+absl::Status CheckSlopeHolds(const GroundPlane& plane, const Surface& surface) {
+  if (plane.slope_pct / 100.0 <= surface.rolling_resistance) return absl::OkStatus();
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "slope_pct: %g %% is steeper than the %s (Stimp %.3g ft) holds a ball at rest (at most "
+      "%.3g %%): the ball would never stop",
+      plane.slope_pct, surface.name, surface.stimp_ft(), 100.0 * surface.rolling_resistance));
+}
+
 absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
                             const GroundPlane& plane, const Hole& hole,
                             const GroundStart& start, const GroundOptions& options) {
@@ -641,12 +647,8 @@ absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
     return absl::InvalidArgumentError(
         "start.velocity_mps: a landing ball must move into the plane");
   }
-  const double tan_alpha = plane.slope_pct / 100.0;
-  if ((options.effects & kGroundDisableSlope) == 0 && tan_alpha > surface.rolling_resistance) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "slope_pct: %g %% is steeper than the %s can hold a ball at rest (at most %.3g %%, its "
-        "rolling resistance)",
-        plane.slope_pct, surface.name, 100.0 * surface.rolling_resistance));
+  if ((options.effects & kGroundDisableSlope) == 0) {
+    if (absl::Status s = CheckSlopeHolds(plane, surface); !s.ok()) return s;
   }
   if (options.hole && start.kind != GroundStartKind::kLanding) {
     const Vector3d q = PlanePoint(plane, start.position_m.x(), start.position_m.y());

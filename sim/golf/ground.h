@@ -177,6 +177,10 @@ struct GroundResult {
   int64_t steps = 0;             ///< RK4 steps on the plane
 };
 
+/// OK where the surface holds a ball at rest on the plane (tan(alpha) <= rolling_resistance);
+/// else InvalidArgument naming slope_pct.
+absl::Status CheckSlopeHolds(const GroundPlane& plane, const Surface& surface);
+
 /// Checks the inputs; InvalidArgument names the first bad field. A plane steeper than the
 /// surface can hold a ball at rest (tan(alpha) > rolling_resistance) is refused: the ball would
 /// never stop.
