@@ -41,8 +41,15 @@ constexpr double RhoOfStimp(double stimp_ft, double g = kStandardGravity) {
 //   friction 0.6, rho 0.45: ~1.7 ft); estimates.
 // - bunker: sand, the ball plugs or barely rolls (restitution x0.3, critical angle x4, friction
 //   1.0, rho 1.2); estimates.
-const std::array<Surface, 7>& Builtins() {
-  static const std::array<Surface, 7> kSurfaces = {{
+// - first_cut (the intermediate cut between fairway and rough): halfway between the fairway and
+//   the rough in every constant; an estimate.
+// - cartpath (asphalt or concrete): a hard surface the ball barely dents (critical angle x0.3)
+//   and leaves lively (restitution x1.5, the most a surface may scale; Penner's curve times 1.5
+//   gives about 0.6 at 10 m/s normal speed, a golf ball's restitution on concrete at that speed
+//   is about 0.7-0.8, so this is, if anything, dead), friction 0.6, rolling fast (rho 0.03,
+//   about a Stimp of 26 ft); estimates.
+const std::array<Surface, 9>& Builtins() {
+  static const std::array<Surface, 9> kSurfaces = {{
       {.name = "green", .restitution_scale = 1.0, .critical_angle_scale = 1.0,
        .bounce_friction = 0.4, .sliding_friction = 0.4, .rolling_resistance = RhoOfStimp(10.0)},
       {.name = "fringe", .restitution_scale = 1.0, .critical_angle_scale = 1.0,
@@ -57,6 +64,10 @@ const std::array<Surface, 7>& Builtins() {
        .bounce_friction = 0.6, .sliding_friction = 0.6, .rolling_resistance = 0.45},
       {.name = "bunker", .restitution_scale = 0.3, .critical_angle_scale = 4.0,
        .bounce_friction = 1.0, .sliding_friction = 1.0, .rolling_resistance = 1.2},
+      {.name = "first_cut", .restitution_scale = 0.85, .critical_angle_scale = 1.7,
+       .bounce_friction = 0.5, .sliding_friction = 0.5, .rolling_resistance = 0.35},
+      {.name = "cartpath", .restitution_scale = 1.5, .critical_angle_scale = 0.3,
+       .bounce_friction = 0.6, .sliding_friction = 0.6, .rolling_resistance = 0.03},
   }};
   return kSurfaces;
 }

@@ -74,7 +74,7 @@ double PennerCriticalAngle(double impact_speed_mps, double descent_angle_rad);
 absl::Status ValidateSurface(const Surface& surface);
 
 /// The built-in surfaces, in order: green (Stimp 10), fringe, fairway_firm, fairway,
-/// fairway_soft, rough, bunker.
+/// fairway_soft, rough, bunker, first_cut, cartpath.
 std::span<const Surface> BuiltinSurfaces();
 /// A built-in surface by name ("fairway_normal" is "fairway"); InvalidArgument naming the known
 /// ones otherwise.
