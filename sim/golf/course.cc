@@ -189,12 +189,98 @@ bool Course::InBounds(double x, double y) const {
   return boundary.empty() || InPolygon(boundary, x, y);
 }
 
-Course::Spot Course::SurfaceAt(double x, double y) const {
-  if (!InBounds(x, y)) return Spot{Terrain::kOutOfBounds, 0};
-  for (auto it = areas.rbegin(); it != areas.rend(); ++it) {
-    if (InPolygon(it->polygon, x, y)) return Spot{it->terrain, it->hole};
+namespace {
+
+// The surface queries, over every area or only those whose bounding box (grown by `margin`)
+// holds the point. One implementation for Course (no boxes) and CourseIndex (boxes).
+struct Scan {
+  const Course& c;
+  const std::vector<Eigen::AlignedBox2d>* boxes;
+
+  bool Near(size_t i, const Vector2d& p, double margin) const {
+    if (boxes == nullptr) return true;
+    const Eigen::AlignedBox2d& b = (*boxes)[i];
+    return p.x() >= b.min().x() - margin && p.x() <= b.max().x() + margin &&
+           p.y() >= b.min().y() - margin && p.y() <= b.max().y() + margin;
   }
-  return Spot{base, 0};
+
+  Course::Spot SurfaceAt(double x, double y) const {
+    if (!c.InBounds(x, y)) return Course::Spot{Terrain::kOutOfBounds, 0};
+    const Vector2d p(x, y);
+    for (size_t i = c.areas.size(); i-- > 0;) {
+      if (Near(i, p, 0.0) && InPolygon(c.areas[i].polygon, x, y)) {
+        return Course::Spot{c.areas[i].terrain, c.areas[i].hole};
+      }
+    }
+    return Course::Spot{c.base, 0};
+  }
+
+  // Within `limit` of an edge of the class's areas (the distance, or infinity beyond it).
+  double DistanceToEdge(double x, double y, Terrain t, double limit) const {
+    double d = std::numeric_limits<double>::infinity();
+    const Vector2d p(x, y);
+    for (size_t i = 0; i < c.areas.size(); ++i) {
+      if (c.areas[i].terrain == t && Near(i, p, limit)) {
+        d = std::min(d, EdgeDistance(c.areas[i].polygon, p));
+      }
+    }
+    return d;
+  }
+
+  Terrain LieAt(double x, double y, double r) const {
+    const Course::Spot spot = SurfaceAt(x, y);
+    const Vector2d p(x, y);
+    // Out of bounds only when all of the ball is (Rule 18.2a): its centre out and at least r
+    // from every edge of the out-of-bounds region.
+    if (spot.terrain == Terrain::kOutOfBounds) {
+      if (!c.terrain.Covers(x, y)) return Terrain::kOutOfBounds;  // off the map
+      double d = DistanceToEdge(x, y, Terrain::kOutOfBounds, r);
+      if (!c.boundary.empty()) d = std::min(d, EdgeDistance(c.boundary, p));
+      if (d >= r) return Terrain::kOutOfBounds;
+    }
+    // Any part in one of the specified areas (Rule 2.2c's order when in two: penalty area,
+    // bunker, putting green).
+    for (Terrain t : {Terrain::kLateralWaterHazard, Terrain::kWaterHazard, Terrain::kBunker,
+                      Terrain::kGreen}) {
+      if (spot.terrain == t || DistanceToEdge(x, y, t, r) < r) return t;
+    }
+    if (spot.terrain != Terrain::kOutOfBounds) return spot.terrain;
+    // Partly out of bounds: in bounds, on what lies under it inside.
+    for (size_t i = c.areas.size(); i-- > 0;) {
+      if (c.areas[i].terrain != Terrain::kOutOfBounds && Near(i, p, 0.0) &&
+          InPolygon(c.areas[i].polygon, x, y)) {
+        return c.areas[i].terrain;
+      }
+    }
+    return c.base;
+  }
+};
+
+}  // namespace
+
+Course::Spot Course::SurfaceAt(double x, double y) const { return Scan{*this, nullptr}.SurfaceAt(x, y); }
+
+double Course::DistanceToEdge(double x, double y, Terrain t) const {
+  return Scan{*this, nullptr}.DistanceToEdge(x, y, t, std::numeric_limits<double>::infinity());
+}
+
+Terrain Course::LieAt(double x, double y, double r) const { return Scan{*this, nullptr}.LieAt(x, y, r); }
+
+CourseIndex::CourseIndex(const Course& course) : course_(course) {
+  boxes_.reserve(course.areas.size());
+  for (const CourseArea& a : course.areas) {
+    Eigen::AlignedBox2d box;
+    for (const Vector2d& p : a.polygon) box.extend(p);
+    boxes_.push_back(box);
+  }
+}
+
+Course::Spot CourseIndex::SurfaceAt(double x, double y) const {
+  return Scan{course_, &boxes_}.SurfaceAt(x, y);
+}
+
+Terrain CourseIndex::LieAt(double x, double y, double r) const {
+  return Scan{course_, &boxes_}.LieAt(x, y, r);
 }
 
 Surface Course::Constants(Spot spot) const {
@@ -217,40 +303,6 @@ Surface Course::Constants(Spot spot) const {
     case Terrain::kOutOfBounds: return named("rough");
   }
   return named("rough");
-}
-
-double Course::DistanceToEdge(double x, double y, Terrain t) const {
-  double d = std::numeric_limits<double>::infinity();
-  const Vector2d p(x, y);
-  for (const CourseArea& a : areas) {
-    if (a.terrain == t) d = std::min(d, EdgeDistance(a.polygon, p));
-  }
-  return d;
-}
-
-Terrain Course::LieAt(double x, double y, double r) const {
-  const Spot spot = SurfaceAt(x, y);
-  const Vector2d p(x, y);
-  // Out of bounds only when all of the ball is (Rule 18.2a): its centre out and at least r
-  // from every edge of the out-of-bounds region.
-  if (spot.terrain == Terrain::kOutOfBounds) {
-    if (!terrain.Covers(x, y)) return Terrain::kOutOfBounds;  // off the map
-    double d = DistanceToEdge(x, y, Terrain::kOutOfBounds);
-    if (!boundary.empty()) d = std::min(d, EdgeDistance(boundary, p));
-    if (d >= r) return Terrain::kOutOfBounds;
-  }
-  // Any part in one of the specified areas (Rule 2.2c's order when in two: penalty area,
-  // bunker, putting green).
-  for (Terrain t : {Terrain::kLateralWaterHazard, Terrain::kWaterHazard, Terrain::kBunker,
-                    Terrain::kGreen}) {
-    if (spot.terrain == t || DistanceToEdge(x, y, t) < r) return t;
-  }
-  if (spot.terrain != Terrain::kOutOfBounds) return spot.terrain;
-  // Partly out of bounds: in bounds, on what lies under it inside.
-  for (auto it = areas.rbegin(); it != areas.rend(); ++it) {
-    if (it->terrain != Terrain::kOutOfBounds && InPolygon(it->polygon, x, y)) return it->terrain;
-  }
-  return base;
 }
 
 // ---- Validation ----

@@ -150,6 +150,20 @@ struct Course {
   double DistanceToEdge(double x, double y, Terrain terrain) const;
 };
 
+/// The surface queries of a course sped up by each area's bounding box: the same answers as
+/// Course::SurfaceAt and Course::LieAt. The course must outlive it and not change.
+class CourseIndex {
+ public:
+  explicit CourseIndex(const Course& course);
+  const Course& course() const { return course_; }
+  Course::Spot SurfaceAt(double x, double y) const;
+  Terrain LieAt(double x, double y, double ball_radius_m) const;
+
+ private:
+  const Course& course_;
+  std::vector<Eigen::AlignedBox2d> boxes_;
+};
+
 /// Checks the whole course; InvalidArgument names the field (and the hole or area).
 absl::Status ValidateCourse(const Course& course);
 

@@ -52,18 +52,123 @@ HermitePoint Hermite(const Vector3d& p0, const Vector3d& v0, const Vector3d& p1,
               h};
 }
 
+Vector3d PlanePoint(const GroundPlane& plane, double x, double y) {
+  return Vector3d(x, y, plane.HeightAt(x, y));
+}
+
+// A zone of the ground: its constants, what it means for play, its name (empty on a plane).
+struct Zone {
+  enum Kind { kPlay, kWater, kOutOfBounds };
+  Surface surface;
+  Kind kind = kPlay;
+  std::string name;
+};
+
+// The ground under the ball: the height, unit normal and zone at (x, y).
+class Ground {
+ public:
+  static constexpr int kOffMap = -1;
+  struct Local {
+    double z = 0.0;
+    Vector3d n = Vector3d::UnitZ();
+  };
+  virtual ~Ground() = default;
+  virtual Local At(double x, double y) const = 0;
+  // The zone under (x, y); kOffMap where the ground ends.
+  virtual int ZoneAt(double x, double y) const = 0;
+  virtual const Zone& ZoneOf(int zone) const = 0;
+  // One plane and one zone: hops and the flat pieces in closed form, no zones to cross.
+  virtual bool IsPlane() const = 0;
+  // One normal everywhere (hops in closed form), zones possibly many.
+  virtual bool IsUniform() const = 0;
+};
+
+class PlaneGround final : public Ground {
+ public:
+  PlaneGround(const GroundPlane& plane, const Surface& surface)
+      : plane_(plane), n_(plane.Normal()), zone_{surface, Zone::kPlay, ""} {}
+  Local At(double x, double y) const override { return {plane_.HeightAt(x, y), n_}; }
+  int ZoneAt(double, double) const override { return 0; }
+  const Zone& ZoneOf(int) const override { return zone_; }
+  bool IsPlane() const override { return true; }
+  bool IsUniform() const override { return true; }
+
+ private:
+  GroundPlane plane_;
+  Vector3d n_;
+  Zone zone_;
+};
+
+class CourseGround final : public Ground {
+ public:
+  CourseGround(const Course& course, double ball_radius)
+      : course_(course), index_(course), radius_(ball_radius) {
+    const int holes = static_cast<int>(course.holes.size());
+    zones_.reserve(static_cast<size_t>(kTerrainCount * (holes + 1)));
+    for (int t = 0; t < kTerrainCount; ++t) {
+      const Terrain terrain = static_cast<Terrain>(t);
+      for (int h = 0; h <= holes; ++h) {
+        zones_.push_back(Zone{course.Constants(Course::Spot{terrain, h}),
+                              IsPenaltyArea(terrain)              ? Zone::kWater
+                              : terrain == Terrain::kOutOfBounds ? Zone::kOutOfBounds
+                                                                  : Zone::kPlay,
+                              std::string(TerrainTag(terrain))});
+      }
+    }
+    off_map_ = zones_[static_cast<size_t>(Index({Terrain::kOutOfBounds, 0}))];
+    const std::vector<double>& z = course.terrain.z_m;
+    uniform_ = std::all_of(z.begin(), z.end(), [&](double v) { return v == z.front(); });
+  }
+  Local At(double x, double y) const override {
+    Local l;
+    course_.terrain.At(x, y, &l.z, &l.n);
+    return l;
+  }
+  int ZoneAt(double x, double y) const override {
+    if (!course_.terrain.Covers(x, y)) return kOffMap;
+    Course::Spot spot = index_.SurfaceAt(x, y);
+    if (spot.terrain == Terrain::kOutOfBounds) {
+      // Out of bounds where all of the ball is (Rule 18.2a); until then, what is inside.
+      const Terrain lie = index_.LieAt(x, y, radius_);
+      if (lie != Terrain::kOutOfBounds) spot = Course::Spot{lie, 0};
+    }
+    return Index(spot);
+  }
+  const Zone& ZoneOf(int zone) const override {
+    return zone == kOffMap ? off_map_ : zones_[static_cast<size_t>(zone)];
+  }
+  bool IsPlane() const override { return false; }
+  bool IsUniform() const override { return uniform_; }
+
+ private:
+  int Index(Course::Spot s) const {
+    return static_cast<int>(s.terrain) * (static_cast<int>(course_.holes.size()) + 1) + s.hole;
+  }
+  const Course& course_;
+  CourseIndex index_;
+  double radius_;
+  std::vector<Zone> zones_;
+  Zone off_map_;
+  bool uniform_ = false;
+};
+
+// The ground's local frame at a point.
+struct Frame {
+  Vector3d n;    // unit normal
+  Vector3d g_t;  // gravity along the ground (zero when the slope is switched off)
+  Vector3d fall; // unit fall line (any tangent on the flat)
+  double g_n = 0.0;  // gravity's normal part, g n_z
+};
+
 // What the run needs of the inputs, resolved once.
 struct Env {
-  Vector3d n;         // the plane's unit normal
   Vector3d g;         // gravity (0, 0, -g)
-  Vector3d g_t;       // gravity along the plane (zero when the slope is switched off)
-  Vector3d fall;      // unit fall line (any tangent on the flat)
-  double g_n = 0.0;   // gravity's normal part, g n_z
   double radius = 0.0;
   double k = 0.4;     // I / (m R^2)
-  double mu = 0.4;    // skid friction
-  double rho = 0.0;   // rolling resistance
-  Vector3d hole_c;    // the hole's centre, on the plane
+  bool slope = true;  // the slope's pull on
+  Vector3d hole_c;    // the hole's centre, on the ground
+  Vector3d hole_n;    // the ground's normal there
+  Vector3d hole_fall; // and its fall line
   double hole_r = 0.0;
   double stick_r = 0.0;  // the flagstick's radius; 0: out
   double stick_e = 0.0;  // its restitution
@@ -75,26 +180,76 @@ struct Ball {
   Vector3d c, v, w;
 };
 
-Vector3d PlanePoint(const GroundPlane& plane, double x, double y) {
-  return Vector3d(x, y, plane.HeightAt(x, y));
-}
+// One step on the ground: the ball after it (its spin not set), the slip, the step's length
+// and whether it ends at the slip's or the roll's end.
+struct StepOut {
+  Ball b;
+  Vector3d s;
+  double step = 0.0;
+  bool transition = false;
+};
 
 class Run {
  public:
-  Run(const Env& env, const Surface& surface, const GroundOptions& options)
-      : e_(env), surface_(surface), options_(options) {}
+  Run(const Env& env, const Ground& ground, const GroundOptions& options)
+      : e_(env), ground_(ground), options_(options), plane_(ground.IsPlane()) {
+    if (plane_) plane_frame_ = MakeFrame(ground.At(0.0, 0.0).n);
+  }
 
-  absl::StatusOr<GroundResult> Go(const GroundStart& start, const GroundPlane& plane);
+  absl::StatusOr<GroundResult> Go(const GroundStart& start);
 
  private:
-  Vector3d Contact(const Vector3d& centre) const { return centre - e_.radius * e_.n; }
+  enum class Next { kDone, kGround, kHop, kImpact };
+
+  Frame MakeFrame(const Vector3d& n) const {
+    Frame f;
+    f.n = n;
+    f.g_n = -e_.g.z() * n.z();
+    const Vector3d gt = e_.g - e_.g.dot(n) * n;
+    f.fall = Unit(gt, Vector3d::UnitX());
+    f.g_t = e_.slope ? gt : Vector3d::Zero();
+    return f;
+  }
+  // The frame and the normal where a ball centred at c touches the ground (Under).
+  Frame FrameAt(const Vector3d& c) const { return plane_ ? plane_frame_ : MakeFrame(Under(c).n); }
+  Vector3d NormalAt(const Vector3d& c) const { return plane_ ? plane_frame_.n : Under(c).n; }
+  // The ground point the ball touches, Q, and the normal there: Q + R n(Q) is the centre's
+  // nearest ground point condition, solved by fixed-point iteration from below the centre
+  // (exact in one on a plane; on terrain a few millimetres' correction near grid kinks).
+  struct Touch {
+    Vector3d q, n;
+  };
+  Touch Under(const Vector3d& c) const {
+    if (plane_) return {c - e_.radius * plane_frame_.n, plane_frame_.n};
+    Ground::Local l = ground_.At(c.x(), c.y());
+    double x = c.x(), y = c.y();
+    for (int i = 0; i < 3; ++i) {
+      x = c.x() - e_.radius * l.n.x();
+      y = c.y() - e_.radius * l.n.y();
+      l = ground_.At(x, y);
+    }
+    return {Vector3d(x, y, l.z), l.n};
+  }
+  // How far the ball's surface is above the ground (m; < 0: into it).
+  double Clearance(const Vector3d& c) const {
+    const Touch t = Under(c);
+    return (c - t.q).dot(t.n) - e_.radius;
+  }
+  // The centre put R above the ground along the normal where it touches.
+  void Settle(Vector3d* c) const {
+    const Touch t = Under(*c);
+    *c += (e_.radius - (*c - t.q).dot(t.n)) * t.n;
+  }
+  Vector3d Contact(const Vector3d& centre) const { return centre - e_.radius * NormalAt(centre); }
+  const Surface& surface() const { return zone_->surface; }
   void Emit(GroundEventKind kind) { EmitAt(kind, b_, t_); }
   void EmitAt(GroundEventKind kind, const Ball& ball, double t) {
     result_.events.push_back(GroundEvent{.t_s = t,
                                          .kind = kind,
                                          .position_m = Contact(ball.c),
                                          .velocity_mps = ball.v,
-                                         .spin_radps = ball.w.norm()});
+                                         .spin_radps = ball.w.norm(),
+                                         .surface = zone_->name});
   }
   void Sample(double t, const Vector3d& centre, double speed) {
     result_.samples.push_back(GroundSample{.t_s = t, .position_m = Contact(centre),
@@ -110,21 +265,56 @@ class Run {
       next_sample_ = start_t_ + options_.sample_interval_s * static_cast<double>(++samples_);
     }
   }
+  // Samples due in (t_, t_ + tf] along a hop from the ball as it is now.
+  void SampleHop(double tf) {
+    if (options_.sample_interval_s <= 0.0) return;
+    while (next_sample_ <= t_ + tf) {
+      const double s = next_sample_ - t_;
+      Sample(next_sample_, b_.c + b_.v * s + 0.5 * s * s * e_.g, (b_.v + s * e_.g).norm());
+      next_sample_ = start_t_ + options_.sample_interval_s * static_cast<double>(++samples_);
+    }
+  }
   void Finish(bool holed) {
+    finished_ = true;
     result_.holed = holed;
     result_.t_rest_s = t_;
+    b_.v.setZero();
     if (holed) {
       result_.rest_m = e_.hole_c;
-      b_.v.setZero();
       b_.w.setZero();
     } else {
       result_.rest_m = Contact(b_.c);
     }
     Emit(holed ? GroundEventKind::kHoled : GroundEventKind::kRest);
     if (holed) result_.events.back().position_m = e_.hole_c;
-    if (options_.sample_interval_s > 0.0) {
-      Sample(t_, holed ? Vector3d(e_.hole_c + e_.radius * e_.n) : b_.c, 0.0);
+    if (!plane_) {
+      result_.rest_surface = zone_->name;
+      result_.out_of_bounds = zone_->kind == Zone::kOutOfBounds;
+      result_.penalty_area = zone_->kind == Zone::kWater;
     }
+    if (options_.sample_interval_s > 0.0) {
+      Sample(t_, holed ? Vector3d(e_.hole_c + e_.radius * e_.hole_n) : b_.c, 0.0);
+    }
+  }
+  // The ball's centre is now over zone `z` (another than zone_): the event, and the end of the
+  // run in water or off the map. True when the run is over.
+  bool EnterZone(int z) {
+    const Zone& next = ground_.ZoneOf(z);
+    const bool was_out = zone_->kind == Zone::kOutOfBounds;
+    zone_id_ = z;
+    zone_ = &next;
+    if (next.kind == Zone::kWater) {
+      Emit(GroundEventKind::kPenaltyArea);
+    } else if (next.kind == Zone::kOutOfBounds) {
+      if (!was_out) Emit(GroundEventKind::kOutOfBounds);
+    } else {
+      Emit(GroundEventKind::kSurface);
+    }
+    if (next.kind == Zone::kWater || z == Ground::kOffMap) {
+      Finish(false);
+      return true;
+    }
+    return false;
   }
 
   absl::Status Poll() {
@@ -139,21 +329,29 @@ class Run {
   }
 
   void Impact();
-  // A hop from the plane, back onto it.
-  void Hop();
-  // The hole as the contact point moves q0 -> q1 (speeds v0 -> v1) over [t0, t0 + h]:
-  // true when the ball drops in (t_ and the ball set to the entry).
+  // A hop from the ground back onto it (or off the map, or into water: true, the run is over).
+  bool Hop();
+  // Impacts and hops until the ball stays on the ground (kGround) or the run ends (kDone).
+  absl::StatusOr<Next> Bounces(bool impact_first);
+  // The hole as the contact point moves from -> to over [t0, t0 + h].
   enum class Rim { kNone, kHoled, kDeflected };
   Rim CrossHole(double t0, double h, const Ball& from, const Ball& to);
   // The ball meets the flagstick after entering the rim at `entry` (time te): holed, or b_ and
   // t_ set to the ball leaving the stick.
   Rim HitFlagstick(const Ball& entry, const Vector3d& de, const Vector3d& dir, double offset,
                    double te);
-  absl::Status OnPlane();
+  // One step of at most h from (from, s0): pure.
+  StepOut Advance(const Ball& from, const Vector3d& s0, bool rolling, double h) const;
+  // The skid and the roll to rest, into the hole, off the ground (kHop, kImpact) or out.
+  absl::StatusOr<Next> OnGround();
 
   const Env& e_;
-  const Surface& surface_;
+  const Ground& ground_;
   const GroundOptions& options_;
+  const bool plane_;
+  Frame plane_frame_;
+  int zone_id_ = 0;
+  const Zone* zone_ = nullptr;
   GroundResult result_;
   Ball b_;
   double t_ = 0.0;
@@ -163,25 +361,28 @@ class Run {
   int64_t polls_ = 0;
   bool in_rim_ = false;  // the contact point is inside the rim's circle (after a lip-out)
   bool holed_ = false;
+  bool first_impact_ = true;
+  bool finished_ = false;
 };
 
-// Penner's bounce against the plane tilted toward the ball by theta_c, with the tangential
+// Penner's bounce against the ground tilted toward the ball by theta_c, with the tangential
 // impulse that stops the contact point's slip, capped by Coulomb (see ground.h).
 void Run::Impact() {
-  const Vector3d& n = e_.n;
+  const Vector3d n = NormalAt(b_.c);
+  const Surface& sf = surface();
   const double vn = -b_.v.dot(n);
   const Vector3d vt = b_.v + vn * n;
   const double vt_norm = vt.norm();
   Vector3d np = n;
-  if (vt_norm > 0.0 && surface_.critical_angle_scale > 0.0) {
+  if (vt_norm > 0.0 && sf.critical_angle_scale > 0.0) {
     const double descent = std::atan2(vn, vt_norm);
     const double tc = std::min(
-        surface_.critical_angle_scale * PennerCriticalAngle(b_.v.norm(), descent),
+        sf.critical_angle_scale * PennerCriticalAngle(b_.v.norm(), descent),
         0.5 * kPi - descent);  // at most head-on against the tilted plane
     np = std::cos(tc) * n - std::sin(tc) * (vt / vt_norm);
   }
   const double un = std::max(-b_.v.dot(np), 0.0);
-  const double e = std::min(1.0, surface_.restitution_scale * PennerRestitution(un));
+  const double e = std::min(1.0, sf.restitution_scale * PennerRestitution(un));
   const double jn = (1.0 + e) * un;  // normal impulse per unit mass
   Vector3d slip = b_.v + b_.w.cross(-e_.radius * np);
   slip -= slip.dot(np) * np;
@@ -189,32 +390,93 @@ void Run::Impact() {
   const double sn = slip.norm();
   if (sn > 0.0) {
     const Vector3d sh = slip / sn;
-    const double j = std::min(sn * e_.k / (1.0 + e_.k), surface_.bounce_friction * jn);
+    const double j = std::min(sn * e_.k / (1.0 + e_.k), sf.bounce_friction * jn);
     b_.v -= j * sh;
     b_.w += (j / (e_.k * e_.radius)) * np.cross(sh);
   }
   ++result_.bounces;
 }
 
-void Run::Hop() {
-  const Vector3d& n = e_.n;
-  const double vn = b_.v.dot(n);
-  const double tf = 2.0 * vn / e_.g_n;  // back on the plane (gravity's normal part g_n)
+bool Run::Hop() {
   const Vector3d c0 = b_.c;
   const Vector3d v0 = b_.v;
-  if (options_.sample_interval_s > 0.0) {
-    while (next_sample_ <= t_ + tf) {
-      const double s = next_sample_ - t_;
-      const Vector3d c = c0 + v0 * s + 0.5 * s * s * e_.g;
-      Sample(next_sample_, c, (v0 + s * e_.g).norm());
-      next_sample_ = start_t_ + options_.sample_interval_s * static_cast<double>(++samples_);
+  auto at = [&](double s) { return Vector3d(c0 + v0 * s + 0.5 * s * s * e_.g); };
+  double tf = 0.0;
+  bool off_map = false;
+  if (ground_.IsUniform()) {
+    const Frame f = FrameAt(c0);
+    tf = 2.0 * v0.dot(f.n) / f.g_n;  // back on the plane (gravity's normal part g_n)
+    const Vector3d c = at(tf);
+    off_map = ground_.ZoneAt(c.x(), c.y()) == Ground::kOffMap;
+  } else {
+    // Probes every 0.1 m of travel (at most 5 ms apart) until the ball is on or under the
+    // tangent plane below its centre, then bisection between the last two.
+    auto clearance = [&](double s) { return Clearance(at(s)); };
+    double lo = 0.0, hi = -1.0;
+    for (int i = 1; hi < 0.0; ++i) {
+      const double v = (v0 + lo * e_.g).norm();
+      const double s = lo + std::min(5e-3, 0.1 / std::max(v, 1e-3));
+      const Vector3d c = at(s);
+      if (ground_.ZoneAt(c.x(), c.y()) == Ground::kOffMap) {
+        off_map = true;
+        hi = s;
+        break;
+      }
+      if (clearance(s) <= 0.0) {
+        hi = s;
+        break;
+      }
+      lo = s;
+      if (i > 1000000) break;  // unreachable: gravity brings it down within seconds
     }
+    if (hi < 0.0) hi = lo;
+    if (!off_map) {
+      for (int i = 0; i < 60 && hi - lo > 1e-12; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (clearance(mid) <= 0.0 ? hi : lo) = mid;
+      }
+    }
+    tf = hi;
   }
-  b_.c = c0 + v0 * tf + 0.5 * tf * tf * e_.g;
+  SampleHop(tf);
+  b_.c = at(tf);
   b_.v = v0 + tf * e_.g;
-  // Back on the plane exactly (rounding): the centre R above it.
-  b_.c += (e_.radius - b_.c.dot(n)) * n;
   t_ += tf;
+  if (off_map) return EnterZone(Ground::kOffMap);
+  Settle(&b_.c);  // back on the ground exactly (rounding, or the bisection's last bit)
+  if (const int z = ground_.ZoneAt(b_.c.x(), b_.c.y()); z != zone_id_) return EnterZone(z);
+  return false;
+}
+
+absl::StatusOr<Run::Next> Run::Bounces(bool impact_first) {
+  double last_rebound = std::numeric_limits<double>::infinity();
+  bool impact = impact_first;
+  for (;;) {
+    if (absl::Status st = Poll(); !st.ok()) return st;
+    if (!impact && Hop()) return Next::kDone;
+    impact = false;
+    const GroundEventKind kind = first_impact_ ? GroundEventKind::kLanding : GroundEventKind::kBounce;
+    if (e_.hole && (Contact(b_.c) - e_.hole_c).norm() <= e_.hole_r - e_.radius) {
+      Emit(kind);
+      Finish(true);
+      return Next::kDone;
+    }
+    Impact();
+    Emit(kind);
+    first_impact_ = false;
+    // The bouncing ends when a rebound is lower than settle_speed_mps, or no lower than the
+    // one before: a ball skimming down a slope at a grazing angle, where the slope's pull
+    // during each hop feeds what the impacts take (Penner's impact law is fitted to
+    // landings, not to a ball skipping along the turf); on the ground it goes on skidding or
+    // rolling.
+    const Vector3d n = NormalAt(b_.c);
+    const double vn = b_.v.dot(n);
+    if (vn < options_.settle_speed_mps || vn >= last_rebound || result_.bounces >= kMaxImpacts) {
+      b_.v -= vn * n;  // stays on the ground
+      return Next::kGround;
+    }
+    last_rebound = vn;
+  }
 }
 
 Run::Rim Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
@@ -257,10 +519,10 @@ Run::Rim Run::CrossHole(double t0, double h, const Ball& from, const Ball& to) {
   const Vector3d& de = entry_point.p;
   const Vector3d& ve = entry_point.v;
   const double speed = ve.norm();
-  const Vector3d dir = Unit(ve, Unit(d1 - d0, e_.fall));
-  const double offset = std::abs(de.cross(dir).dot(e_.n));
+  const Vector3d dir = Unit(ve, Unit(d1 - d0, e_.hole_fall));
+  const double offset = std::abs(de.cross(dir).dot(e_.hole_n));
   const double te = t0 + lambda * h;
-  const Ball entry{e_.hole_c + de + e_.radius * e_.n, ve, from.w + lambda * (to.w - from.w)};
+  const Ball entry{e_.hole_c + de + e_.radius * e_.hole_n, ve, from.w + lambda * (to.w - from.w)};
   if (speed <= HoleCaptureSpeed(e_.hole_r, e_.radius, offset, -e_.g.z())) {
     b_ = entry;
     t_ = te;
@@ -306,31 +568,114 @@ Run::Rim Run::HitFlagstick(const Ball& entry, const Vector3d& de, const Vector3d
     exit = c + to_rim * u;
     t_exit = t1 + to_rim / v1n;
   }
-  b_ = Ball{e_.hole_c + c + e_.radius * e_.n, v1, entry.w};
+  b_ = Ball{e_.hole_c + c + e_.radius * e_.hole_n, v1, entry.w};
   t_ = te + t1;
   if (holed) return Rim::kHoled;
   Emit(GroundEventKind::kLipOut);
-  b_.c = e_.hole_c + exit + e_.radius * e_.n;
+  b_.c = e_.hole_c + exit + e_.radius * e_.hole_n;
   t_ = te + t_exit;
   return Rim::kDeflected;
 }
 
-// The skid and the roll on the plane, to rest or into the hole.
-absl::Status Run::OnPlane() {
-  const Vector3d& n = e_.n;
-  // Without a pull along the plane (flat, or the slope switched off) neither the slip's nor the
+StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double h) const {
+  // Without a pull along a plane (flat, or the slope switched off) neither the slip's nor the
   // velocity's direction turns: the skid and the roll are each at constant acceleration, and
-  // one step reaches each transition exactly (the step is cut there). Otherwise RK4 at dt_s.
-  const bool straight = e_.g_t.squaredNorm() == 0.0;
-  const double h = straight ? options_.max_time_s : options_.dt_s;
-  const double rate_slip = e_.mu * e_.g_n * (1.0 + 1.0 / e_.k);
-  // The slip of the contact point (tangential: the ball is on the plane) and the spin about the
-  // normal (friction does not change it), from the ball as it is now: here, and after the
+  // one step reaches each transition exactly (the step is cut there). Otherwise RK4.
+  const Frame f0 = FrameAt(from.c);
+  const bool straight = ground_.IsUniform() && f0.g_t.squaredNorm() == 0.0;
+  const double mu = surface().sliding_friction;
+  const double hold = surface().rolling_resistance * f0.g_n;  // the most the resistance holds
+  StepOut o{from, s0, h, false};
+  Ball& b = o.b;
+  if (!rolling) {
+    const double rate_slip = mu * f0.g_n * (1.0 + 1.0 / e_.k);
+    const Vector3d sh = s0 / s0.norm();
+    const double r = rate_slip - f0.g_t.dot(sh);
+    // Near its end the slip's direction turns ever faster (the slope's pull against a
+    // vanishing slip): the steps shrink with the time left, half of it each, so each turns
+    // the direction by a bounded angle, until the last piece is short.
+    const double left = r > 0.0 ? s0.norm() / r : h;
+    const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
+    if (r > 0.0 && s0.norm() <= r * hs) {
+      // The slip ends inside this step. v - k/(1+k) s moves at the constant rate g_t/(1+k)
+      // (the friction terms cancel), so the velocity at the end of the slip is exact whatever
+      // path the slip's direction takes on the way to zero; the position takes the slip as
+      // shrinking linearly over the piece.
+      o.step = s0.norm() / r;
+      const double kk = e_.k / (1.0 + e_.k);
+      const Vector3d base = from.v - kk * s0;
+      b.c += (base + 0.5 * kk * s0) * o.step + (0.5 * o.step * o.step / (1.0 + e_.k)) * f0.g_t;
+      b.v = base + (o.step / (1.0 + e_.k)) * f0.g_t;
+      o.s.setZero();
+      o.transition = true;
+      return o;
+    }
+    // RK4 on (c, v, s), the ground's frame taken where each stage puts the centre.
+    struct D {
+      Vector3d c, v, s;
+    };
+    auto f = [&](const Vector3d& c, const Vector3d& v, const Vector3d& sl) {
+      const Frame fr = plane_ ? f0 : FrameAt(c);
+      const Vector3d u = Unit(sl, Vector3d::Zero());
+      return D{v, fr.g_t - mu * fr.g_n * u, fr.g_t - mu * fr.g_n * (1.0 + 1.0 / e_.k) * u};
+    };
+    o.step = hs;
+    const D k1 = f(b.c, b.v, s0);
+    const D k2 = f(b.c + 0.5 * hs * k1.c, b.v + 0.5 * hs * k1.v, s0 + 0.5 * hs * k1.s);
+    const D k3 = f(b.c + 0.5 * hs * k2.c, b.v + 0.5 * hs * k2.v, s0 + 0.5 * hs * k2.s);
+    const D k4 = f(b.c + hs * k3.c, b.v + hs * k3.v, s0 + hs * k3.s);
+    b.c += (hs / 6.0) * (k1.c + 2.0 * k2.c + 2.0 * k3.c + k4.c);
+    b.v += (hs / 6.0) * (k1.v + 2.0 * k2.v + 2.0 * k3.v + k4.v);
+    o.s += (hs / 6.0) * (k1.s + 2.0 * k2.s + 2.0 * k3.s + k4.s);
+    return o;
+  }
+  const double speed = from.v.norm();
+  const Vector3d vh = Unit(from.v, Unit(f0.g_t, f0.fall));
+  const double r = (hold - f0.g_t.dot(vh)) / (1.0 + e_.k);
+  // As for the slip: the path hooks down the slope ever tighter as the ball stops.
+  const double left = r > 0.0 ? speed / r : h;
+  const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
+  if (r > 0.0 && speed <= r * hs) {
+    o.step = speed / r;
+    const Vector3d a = (f0.g_t - hold * vh) / (1.0 + e_.k);
+    b.c += from.v * o.step + 0.5 * o.step * o.step * a;
+    b.v.setZero();
+    o.transition = true;
+    return o;
+  }
+  const double rho = surface().rolling_resistance;
+  auto acc = [&](const Vector3d& c, const Vector3d& v) {
+    const Frame fr = plane_ ? f0 : FrameAt(c);
+    return Vector3d((fr.g_t - rho * fr.g_n * Unit(v, vh)) / (1.0 + e_.k));
+  };
+  o.step = hs;
+  const Vector3d c0 = b.c, v0 = b.v;
+  const Vector3d k1 = acc(c0, v0);
+  const Vector3d v2 = v0 + 0.5 * hs * k1;
+  const Vector3d k2 = acc(c0 + 0.5 * hs * v0, v2);
+  const Vector3d v3 = v0 + 0.5 * hs * k2;
+  const Vector3d k3 = acc(c0 + 0.5 * hs * v2, v3);
+  const Vector3d v4 = v0 + hs * k3;
+  const Vector3d k4 = acc(c0 + hs * v3, v4);
+  b.c += (hs / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
+  b.v += (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  return o;
+}
+
+// The skid and the roll, to rest, into the hole, off the ground or out of play.
+absl::StatusOr<Run::Next> Run::OnGround() {
+  // On one plane without a pull along it, one step reaches each transition (the exact pieces);
+  // zones to cross, or a pull, take steps of dt_s.
+  const bool one_piece = plane_ && plane_frame_.g_t.squaredNorm() == 0.0;
+  const double h = one_piece ? options_.max_time_s : options_.dt_s;
+  // The slip of the contact point (tangential: the ball is on the ground) and the spin about
+  // the normal (friction does not change it), from the ball as it is now: here, and after the
   // flagstick.
   Vector3d s;
   double w_normal = 0.0;
   bool rolling = false;
   auto take_ball = [&] {
+    const Vector3d n = NormalAt(b_.c);
     s = b_.v + b_.w.cross(-e_.radius * n);
     s -= s.dot(n) * n;
     w_normal = b_.w.dot(n);
@@ -338,115 +683,88 @@ absl::Status Run::OnPlane() {
     if (rolling) s.setZero();
   };
   take_ball();
-  auto spin_of = [&](const Vector3d& v, const Vector3d& slip) {
-    return Vector3d(w_normal * n + n.cross(v - slip) / e_.radius);
-  };
-  const double hold = e_.rho * e_.g_n;  // the most the resistance holds at rest
   for (;;) {
     if (absl::Status st = Poll(); !st.ok()) return st;
     const Ball from = b_;
     const double t0 = t_;
-    double step = h;
-    bool transition = false;  // slip or speed reaches zero at the step's end
-    if (!rolling) {
-      const Vector3d sh = s / s.norm();
-      const double r = rate_slip - e_.g_t.dot(sh);
-      // Near its end the slip's direction turns ever faster (the slope's pull against a
-      // vanishing slip): the steps shrink with the time left, half of it each, so each turns
-      // the direction by a bounded angle, until the last piece is short.
-      const double left = r > 0.0 ? s.norm() / r : h;
-      const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
-      if (r > 0.0 && s.norm() <= r * hs) {
-        // The slip ends inside this step. v - k/(1+k) s moves at the constant rate g_t/(1+k)
-        // (the friction terms cancel), so the velocity at the end of the slip is exact whatever
-        // path the slip's direction takes on the way to zero; the position takes the slip as
-        // shrinking linearly over the piece.
-        step = s.norm() / r;
-        const double kk = e_.k / (1.0 + e_.k);
-        const Vector3d base = b_.v - kk * s;
-        b_.c += (base + 0.5 * kk * s) * step + (0.5 * step * step / (1.0 + e_.k)) * e_.g_t;
-        b_.v = base + (step / (1.0 + e_.k)) * e_.g_t;
-        s.setZero();
-        transition = true;
-      } else {
-        // RK4 on (c, v, s).
-        struct D {
-          Vector3d c, v, s;
-        };
-        auto f = [&](const Vector3d& v, const Vector3d& sl) {
-          const Vector3d u = Unit(sl, Vector3d::Zero());
-          return D{v, e_.g_t - e_.mu * e_.g_n * u, e_.g_t - rate_slip * u};
-        };
-        step = hs;
-        const D k1 = f(b_.v, s);
-        const D k2 = f(b_.v + 0.5 * hs * k1.v, s + 0.5 * hs * k1.s);
-        const D k3 = f(b_.v + 0.5 * hs * k2.v, s + 0.5 * hs * k2.s);
-        const D k4 = f(b_.v + hs * k3.v, s + hs * k3.s);
-        b_.c += (hs / 6.0) * (k1.c + 2.0 * k2.c + 2.0 * k3.c + k4.c);
-        b_.v += (hs / 6.0) * (k1.v + 2.0 * k2.v + 2.0 * k3.v + k4.v);
-        s += (hs / 6.0) * (k1.s + 2.0 * k2.s + 2.0 * k3.s + k4.s);
-      }
-    } else {
-      const double speed = b_.v.norm();
-      const Vector3d vh = Unit(b_.v, Unit(e_.g_t, e_.fall));
-      const double r = (hold - e_.g_t.dot(vh)) / (1.0 + e_.k);
-      // As for the slip: the path hooks down the slope ever tighter as the ball stops.
-      const double left = r > 0.0 ? speed / r : h;
-      const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
-      if (r > 0.0 && speed <= r * hs) {
-        step = speed / r;
-        const Vector3d a = (e_.g_t - hold * vh) / (1.0 + e_.k);
-        b_.c += b_.v * step + 0.5 * step * step * a;
-        b_.v.setZero();
-        transition = true;
-      } else {
-        auto acc = [&](const Vector3d& v) {
-          return Vector3d((e_.g_t - hold * Unit(v, vh)) / (1.0 + e_.k));
-        };
-        step = hs;
-        const Vector3d k1 = acc(b_.v);
-        const Vector3d k2 = acc(b_.v + 0.5 * hs * k1);
-        const Vector3d k3 = acc(b_.v + 0.5 * hs * k2);
-        const Vector3d k4 = acc(b_.v + hs * k3);
-        const Vector3d v0 = b_.v;
-        b_.c += hs * v0 + (hs * hs / 6.0) * (k1 + k2 + k3);
-        b_.v += (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+    StepOut o = Advance(from, s, rolling, h);
+    // Onto another zone (or off the map): the step is cut where the centre crosses.
+    int zone = zone_id_;
+    if (!plane_) {
+      zone = ground_.ZoneAt(o.b.c.x(), o.b.c.y());
+      if (zone != zone_id_) {
+        double lo = 0.0, hi = o.step;
+        for (int i = 0; i < 64 && hi - lo > 1e-9; ++i) {
+          const double mid = 0.5 * (lo + hi);
+          const StepOut m = Advance(from, s, rolling, mid);
+          (ground_.ZoneAt(m.b.c.x(), m.b.c.y()) == zone_id_ ? lo : hi) = mid;
+        }
+        if (hi < o.step) o = Advance(from, s, rolling, hi);
+        zone = ground_.ZoneAt(o.b.c.x(), o.b.c.y());
       }
     }
-    // Keep the centre on the plane against rounding.
-    b_.c += (e_.radius - b_.c.dot(n)) * n;
-    b_.v -= b_.v.dot(n) * n;
-    b_.w = spin_of(b_.v, s);
-    t_ = t0 + step;
+    b_.c = o.b.c;
+    b_.v = o.b.v;
+    s = o.s;
+    t_ = t0 + o.step;
     ++result_.steps;
+    // Keep the ball on the ground: it takes off where the ground falls away faster than
+    // gravity pulls it back over the step, and meets rising ground in an impact.
+    const Frame f1 = FrameAt(b_.c);
+    Next leave = Next::kGround;
+    if (!plane_ && zone != Ground::kOffMap) {
+      const double vn = b_.v.dot(f1.n);
+      if (vn > f1.g_n * o.step) {
+        leave = Next::kHop;
+      } else if (vn < -options_.settle_speed_mps) {
+        leave = Next::kImpact;
+      }
+    }
+    if (plane_) {
+      b_.c += (e_.radius - b_.c.dot(f1.n)) * f1.n;  // against rounding
+    } else if (leave != Next::kHop) {
+      Settle(&b_.c);  // on the ground (an impact too: it meets the ground where it touches)
+    }
+    if (leave == Next::kGround) {
+      b_.v -= b_.v.dot(f1.n) * f1.n;
+      s -= s.dot(f1.n) * f1.n;
+    }
+    b_.w = w_normal * f1.n + f1.n.cross(b_.v - s) / e_.radius;
     SampleSegment(t0, t_, from, b_);
-    switch (CrossHole(t0, step, from, b_)) {
+    switch (CrossHole(t0, t_ - t0, from, b_)) {
       case Rim::kNone: break;
-      case Rim::kHoled: holed_ = true; return absl::OkStatus();
+      case Rim::kHoled: holed_ = true; return Next::kDone;
       case Rim::kDeflected:
         take_ball();  // off the flagstick: the new velocity with the old spin slips
         continue;
     }
-    if (!transition) continue;
+    if (zone != zone_id_) {
+      if (EnterZone(zone)) return Next::kDone;
+    }
+    if (leave != Next::kGround) return leave;
+    if (!o.transition) continue;
     if (!rolling) {
       rolling = true;
       Emit(GroundEventKind::kRoll);
       continue;
     }
     // Speed zero: at rest where the resistance holds the slope's pull.
-    if (e_.g_t.norm() <= hold) {
+    if (f1.g_t.norm() <= surface().rolling_resistance * f1.g_n) {
       if (e_.hole && (Contact(b_.c) - e_.hole_c).norm() <= e_.hole_r) {
         holed_ = true;  // at rest over the hole: it drops
       }
-      return absl::OkStatus();
+      return Next::kDone;
     }
   }
 }
 
-absl::StatusOr<GroundResult> Run::Go(const GroundStart& start, const GroundPlane& plane) {
+absl::StatusOr<GroundResult> Run::Go(const GroundStart& start) {
   start_t_ = t_ = start.time_s;
   next_sample_ = start_t_;
-  b_.c = PlanePoint(plane, start.position_m.x(), start.position_m.y()) + e_.radius * e_.n;
+  zone_id_ = ground_.ZoneAt(start.position_m.x(), start.position_m.y());
+  zone_ = &ground_.ZoneOf(zone_id_);
+  const Ground::Local l = ground_.At(start.position_m.x(), start.position_m.y());
+  b_.c = Vector3d(start.position_m.x(), start.position_m.y(), l.z) + e_.radius * l.n;
   b_.v = start.velocity_mps;
   b_.w = Vector3d::Zero();
   switch (start.kind) {
@@ -455,11 +773,11 @@ absl::StatusOr<GroundResult> Run::Go(const GroundStart& start, const GroundPlane
       break;
     case GroundStartKind::kPutt:
     case GroundStartKind::kRolling: {
-      // Along the plane, at the given speed, heading where the given velocity points.
+      // Along the ground, at the given speed, heading where the given velocity points.
       const double speed = b_.v.norm();
-      b_.v = speed * Unit(b_.v - b_.v.dot(e_.n) * e_.n, Vector3d::Zero());
+      b_.v = speed * Unit(b_.v - b_.v.dot(l.n) * l.n, Vector3d::Zero());
       if (start.kind == GroundStartKind::kRolling) {
-        b_.w = e_.n.cross(b_.v) / e_.radius;  // the contact point at rest
+        b_.w = l.n.cross(b_.v) / e_.radius;  // the contact point at rest
       }
       break;
     }
@@ -469,35 +787,21 @@ absl::StatusOr<GroundResult> Run::Go(const GroundStart& start, const GroundPlane
     next_sample_ = start_t_ + options_.sample_interval_s;
     samples_ = 1;
   }
-  if (start.kind == GroundStartKind::kLanding) {
-    bool first = true;
-    double last_rebound = std::numeric_limits<double>::infinity();
-    for (;;) {
-      if (absl::Status st = Poll(); !st.ok()) return st;
-      if (e_.hole && (Contact(b_.c) - e_.hole_c).norm() <= e_.hole_r - e_.radius) {
-        Emit(first ? GroundEventKind::kLanding : GroundEventKind::kBounce);
-        Finish(true);
-        return std::move(result_);
-      }
-      Impact();
-      Emit(first ? GroundEventKind::kLanding : GroundEventKind::kBounce);
-      first = false;
-      // The bouncing ends when a rebound is lower than settle_speed_mps, or no lower than the
-      // one before: a ball skimming down a slope at a grazing angle, where the slope's pull
-      // during each hop feeds what the impacts take (Penner's impact law is fitted to
-      // landings, not to a ball skipping along the turf); on the plane it goes on skidding or
-      // rolling.
-      const double vn = b_.v.dot(e_.n);
-      if (vn < options_.settle_speed_mps || vn >= last_rebound || result_.bounces >= kMaxImpacts) {
-        b_.v -= vn * e_.n;  // stays on the plane
-        break;
-      }
-      last_rebound = vn;
-      Hop();
-    }
+  Next next = start.kind == GroundStartKind::kLanding ? Next::kImpact : Next::kGround;
+  first_impact_ = start.kind == GroundStartKind::kLanding;  // else impacts are bounces
+  if (zone_->kind == Zone::kWater) {  // landed in water
+    Emit(GroundEventKind::kLanding);
+    Emit(GroundEventKind::kPenaltyArea);
+    Finish(false);
+    return std::move(result_);
   }
-  if (absl::Status st = OnPlane(); !st.ok()) return st;
-  Finish(holed_);
+  while (next != Next::kDone) {
+    absl::StatusOr<Next> n =
+        next == Next::kGround ? OnGround() : Bounces(/*impact_first=*/next == Next::kImpact);
+    if (!n.ok()) return n.status();
+    next = *n;
+  }
+  if (!finished_) Finish(holed_);
   return std::move(result_);
 }
 
@@ -544,6 +848,9 @@ std::string_view GroundEventName(GroundEventKind kind) {
     case GroundEventKind::kHoled: return "holed";
     case GroundEventKind::kLipOut: return "lip_out";
     case GroundEventKind::kRest: return "rest";
+    case GroundEventKind::kSurface: return "surface";
+    case GroundEventKind::kOutOfBounds: return "out_of_bounds";
+    case GroundEventKind::kPenaltyArea: return "penalty_area";
   }
   return "rest";
 }
@@ -562,17 +869,16 @@ absl::Status CheckSlopeHolds(const GroundPlane& plane, const Surface& surface) {
       plane.slope_pct, surface.name, surface.stimp_ft(), 100.0 * surface.rolling_resistance));
 }
 
-absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
-                            const GroundPlane& plane, const Hole& hole,
+namespace {
+
+// The checks a plane and a course share: the ball, the options, the hole's size and flagstick
+// (its position when `hole_position`), the start's numbers.
+absl::Status ValidateCommon(const BallSpec& ball, const Hole& hole, bool hole_position,
                             const GroundStart& start, const GroundOptions& options) {
   if (absl::Status s = ValidateBallSpec(ball); !s.ok()) return s;
-  if (absl::Status s = ValidateSurface(surface); !s.ok()) return s;
   if (absl::Status s = CheckFieldsInRange({
-          {"slope_pct", plane.slope_pct, 0, false, kMaxSlopePct},
-          {"slope_toward_deg", plane.slope_toward_deg, -1e6, false, 1e6},
           {"gravity_mps2", options.gravity_mps2, 0, true, 100},
           {"dt_s", options.dt_s, 1e-6, false, 0.01},
-
           {"max_time_s", options.max_time_s, 0, true, 3600},
           {"settle_speed_mps", options.settle_speed_mps, 0.001, false, 1},
           {"start.time_s", start.time_s, -1e6, false, 1e6},
@@ -616,9 +922,11 @@ absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
         return absl::InvalidArgumentError(absl::StrCat(s.message(), " (or 0: the flagstick out)"));
       }
     }
-    for (const auto& [name, v] : {std::pair{"hole.x_m", hole.x_m}, {"hole.y_m", hole.y_m}}) {
-      if (absl::Status s = CheckFiniteInRange(name, v, -1e5, false, 1e5, false); !s.ok()) {
-        return s;
+    if (hole_position) {
+      for (const auto& [name, v] : {std::pair{"hole.x_m", hole.x_m}, {"hole.y_m", hole.y_m}}) {
+        if (absl::Status s = CheckFiniteInRange(name, v, -1e5, false, 1e5, false); !s.ok()) {
+          return s;
+        }
       }
     }
   }
@@ -642,6 +950,43 @@ absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
       return s;
     }
   }
+  return absl::OkStatus();
+}
+
+Env MakeEnv(const BallSpec& ball, const Hole& hole, const GroundOptions& options) {
+  Env env;
+  env.g = Vector3d(0.0, 0.0, -options.gravity_mps2);
+  env.radius = ball.radius_m();
+  env.k = ball.inertia_factor;
+  env.slope = (options.effects & kGroundDisableSlope) == 0;
+  env.hole = options.hole;
+  env.hole_r = 0.5 * hole.diameter_m;
+  env.stick_r = 0.5 * hole.flagstick_diameter_m;
+  env.stick_e = hole.flagstick_restitution;
+  return env;
+}
+
+void PlaceHole(const Ground& ground, double x, double y, const Vector3d& g, Env* env) {
+  const Ground::Local l = ground.At(x, y);
+  env->hole_c = Vector3d(x, y, l.z);
+  env->hole_n = l.n;
+  env->hole_fall = Unit(g - g.dot(l.n) * l.n, Vector3d::UnitX());
+}
+
+}  // namespace
+
+absl::Status ValidateGround(const BallSpec& ball, const Surface& surface,
+                            const GroundPlane& plane, const Hole& hole,
+                            const GroundStart& start, const GroundOptions& options) {
+  if (absl::Status s = ValidateSurface(surface); !s.ok()) return s;
+  if (absl::Status s = CheckFieldsInRange({
+          {"slope_pct", plane.slope_pct, 0, false, kMaxSlopePct},
+          {"slope_toward_deg", plane.slope_toward_deg, -1e6, false, 1e6},
+      });
+      !s.ok()) {
+    return s;
+  }
+  if (absl::Status s = ValidateCommon(ball, hole, true, start, options); !s.ok()) return s;
   const Vector3d n = plane.Normal();
   if (start.kind == GroundStartKind::kLanding && !(start.velocity_mps.dot(n) < 0.0)) {
     return absl::InvalidArgumentError(
@@ -667,24 +1012,48 @@ absl::StatusOr<GroundResult> SimulateGround(const BallSpec& ball, const Surface&
   if (absl::Status s = ValidateGround(ball, surface, plane, hole, start, options); !s.ok()) {
     return s;
   }
-  Env env;
-  env.n = plane.Normal();
-  env.g = Vector3d(0.0, 0.0, -options.gravity_mps2);
-  env.g_n = options.gravity_mps2 * env.n.z();
-  const Vector3d gt = env.g - env.g.dot(env.n) * env.n;
-  env.fall = Unit(gt, Vector3d::UnitX());
-  env.g_t = (options.effects & kGroundDisableSlope) != 0 ? Vector3d::Zero() : gt;
-  env.radius = ball.radius_m();
-  env.k = ball.inertia_factor;
-  env.mu = surface.sliding_friction;
-  env.rho = surface.rolling_resistance;
-  env.hole = options.hole;
-  env.hole_c = PlanePoint(plane, hole.x_m, hole.y_m);
-  env.hole_r = 0.5 * hole.diameter_m;
-  env.stick_r = 0.5 * hole.flagstick_diameter_m;
-  env.stick_e = hole.flagstick_restitution;
-  Run run(env, surface, options);
-  return run.Go(start, plane);
+  const PlaneGround ground(plane, surface);
+  Env env = MakeEnv(ball, hole, options);
+  PlaceHole(ground, hole.x_m, hole.y_m, env.g, &env);
+  Run run(env, ground, options);
+  return run.Go(start);
+}
+
+absl::StatusOr<GroundResult> SimulateGroundOnCourse(const BallSpec& ball, const Course& course,
+                                                    int hole_number, const Hole& hole,
+                                                    const GroundStart& start,
+                                                    const GroundOptions& options) {
+  if (absl::Status s = ValidateCommon(ball, hole, false, start, options); !s.ok()) return s;
+  const CourseHole* h = course.Hole(hole_number);
+  if (h == nullptr) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "hole: %d is not a hole of %s (1 to %d)", hole_number, course.name, course.holes.size()));
+  }
+  const double x = start.position_m.x(), y = start.position_m.y();
+  const CourseGround ground(course, ball.radius_m());
+  const int zone = ground.ZoneAt(x, y);
+  const Zone& z = ground.ZoneOf(zone);
+  if (z.kind == Zone::kOutOfBounds) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "start.position_m: (%g, %g) is out of bounds on %s", x, y, course.name));
+  }
+  if (z.kind == Zone::kWater && start.kind != GroundStartKind::kLanding) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "start.position_m: (%g, %g) is in water (golf=%s)", x, y, z.name));
+  }
+  const Ground::Local l = ground.At(x, y);
+  if (start.kind == GroundStartKind::kLanding && !(start.velocity_mps.dot(l.n) < 0.0)) {
+    return absl::InvalidArgumentError(
+        "start.velocity_mps: a landing ball must move into the ground");
+  }
+  Env env = MakeEnv(ball, hole, options);
+  PlaceHole(ground, h->pin_m->x(), h->pin_m->y(), env.g, &env);
+  if (options.hole && start.kind != GroundStartKind::kLanding &&
+      (Vector3d(x, y, l.z) - env.hole_c).norm() <= 0.5 * hole.diameter_m) {
+    return absl::InvalidArgumentError("start.position_m: the ball starts in the hole");
+  }
+  Run run(env, ground, options);
+  return run.Go(start);
 }
 
 }  // namespace sportsim::golf

@@ -68,6 +68,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -75,6 +76,7 @@
 
 #include "absl/status/statusor.h"
 #include "sim/golf/ball_flight.h"
+#include "sim/golf/course.h"
 #include "sim/golf/golf_ball.h"
 #include "sim/golf/surface.h"
 
@@ -148,8 +150,19 @@ struct GroundOptions {
   std::function<bool()> cancelled;
 };
 
-enum class GroundEventKind { kLanding, kBounce, kRoll, kHoled, kLipOut, kRest };
-/// "landing", "bounce", "roll", "holed", "lip_out", "rest".
+enum class GroundEventKind {
+  kLanding,
+  kBounce,
+  kRoll,
+  kHoled,
+  kLipOut,
+  kRest,
+  kSurface,      ///< (courses) the ball's centre crossed onto another surface
+  kOutOfBounds,  ///< (courses) all of the ball went out of bounds (or off the map)
+  kPenaltyArea,  ///< (courses) the ball entered water (a penalty area): the run ends there
+};
+/// "landing", "bounce", "roll", "holed", "lip_out", "rest", "surface", "out_of_bounds",
+/// "penalty_area".
 std::string_view GroundEventName(GroundEventKind kind);
 
 struct GroundEvent {
@@ -158,6 +171,9 @@ struct GroundEvent {
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< contact point (see above)
   Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  ///< the centre's, after the event
   double spin_radps = 0.0;  ///< |angular velocity| after the event
+  /// (courses) the surface class under the ball after the event (course.h's tags); empty on a
+  /// plane.
+  std::string surface;
 };
 
 struct GroundSample {
@@ -175,6 +191,10 @@ struct GroundResult {
   std::vector<GroundEvent> events;   ///< in time order; the last is kHoled or kRest
   std::vector<GroundSample> samples; ///< every sample_interval_s from the start, then the rest
   int64_t steps = 0;             ///< RK4 steps on the plane
+  // Courses only (a plane leaves them empty and false):
+  std::string rest_surface;      ///< the surface class under the ball at rest
+  bool out_of_bounds = false;    ///< at rest out of bounds (all of the ball), or off the map
+  bool penalty_area = false;     ///< in water: the run ended where the ball entered it
 };
 
 /// OK where the surface holds a ball at rest on the plane (tan(alpha) <= rolling_resistance);
@@ -195,6 +215,25 @@ absl::StatusOr<GroundResult> SimulateGround(const BallSpec& ball, const Surface&
                                             const GroundPlane& plane, const Hole& hole,
                                             const GroundStart& start,
                                             const GroundOptions& options);
+
+/// The ground phase on a course: its terrain (the ball lands on the terrain's height and
+/// normal; bounces, skid and roll follow the local slope), its surfaces (each zone's constants;
+/// a surface event where the centre crosses onto another, out_of_bounds where all of the ball
+/// is out, penalty_area where it enters water, which ends the run there) and hole
+/// `hole_number`'s pin (the hole's size and flagstick from `hole`; its x_m and y_m are not
+/// used). The start's x and y are on the course; its z is the terrain's there.
+///
+/// On terrain the ball is kept on the ground's tangent plane at its centre after each step.
+/// Where the ground falls away faster than gravity can hold the ball to it (the step's turn of
+/// the normal takes more normal speed than gravity gives back) it takes off and hops; where
+/// the ground rises into it by more than settle_speed_mps it bounces (Penner's impact), less
+/// is absorbed. Hops over uneven ground land where the ball first touches the local tangent
+/// plane (probed every 0.1 m of travel, then bisected). A surface change cuts the step where
+/// the centre crosses it (bisection on the step's length, to 1 ns).
+absl::StatusOr<GroundResult> SimulateGroundOnCourse(const BallSpec& ball, const Course& course,
+                                                    int hole_number, const Hole& hole,
+                                                    const GroundStart& start,
+                                                    const GroundOptions& options);
 
 /// The capture speed of the hole for a ball crossing it with its centre's line b from the
 /// hole's centre (m/s; 0 when it cannot drop): (L - R) sqrt(g / (2 R)), L = 2 sqrt(r_h^2 - b^2).
