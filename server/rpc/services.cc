@@ -340,6 +340,17 @@ class SwingService final : public v1::Swing::CallbackService {
     });
   }
 
+  grpc::ServerUnaryReactor* ListCourses(grpc::CallbackServerContext* ctx,
+                                        const v1::ListCoursesRequest*,
+                                        v1::ListCoursesResponse* response) override {
+    return Unary(ctx, response, [] { return absl::StatusOr<v1::ListCoursesResponse>(server::ListCourses()); });
+  }
+  grpc::ServerUnaryReactor* GetCourse(grpc::CallbackServerContext* ctx,
+                                      const v1::GetCourseRequest* request,
+                                      v1::CourseInfo* response) override {
+    return Unary(ctx, response, [&] { return server::GetCourse(*request); });
+  }
+
   // Like a swing, a flight polls its control (deadline, cancellation, CPU budget, shutdown).
   static absl::Status Fly(const v1::SimulateFlightRequest& request, const WorkControl& control,
                           v1::SimulateFlightResponse* response) {
@@ -751,6 +762,8 @@ v1::GetInfoResponse MakeServerInfo() {
   for (const std::string& e : SwingEffectNames()) caps->add_swing_effects(e);
   for (v1::ParameterInfo& p : SwingParameterInfo()) *caps->add_swing_parameters() = std::move(p);
   GamesToProto(caps->mutable_games());
+  for (std::string_view c : golf::BuiltinCourseNames()) caps->add_golf_courses(std::string(c));
+  for (const golf::Surface& s : golf::BuiltinSurfaces()) caps->add_golf_surfaces(s.name);
   *caps->mutable_presets() = caps->table_presets();
   caps->add_services(v1::Server::service_full_name());
   caps->add_services(v1::Swing::service_full_name());

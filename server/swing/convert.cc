@@ -258,6 +258,7 @@ void GroundEventToProto(const golf::GroundEvent& e, v1::GolfEvent* out) {
   out->set_z_m(e.position_m.z());
   out->set_speed_mps(e.velocity_mps.norm());
   out->set_spin_rpm(e.spin_radps / golf::kRpmToRadPerS);
+  out->set_surface(e.surface);
 }
 
 void GroundRestToProto(const golf::GroundResult& g, const std::string& surface,

@@ -10,6 +10,7 @@
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "server/app/server_app.h"
+#include "sim/golf/course_shot.h"
 #include "sim/golf/ground.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
@@ -75,6 +76,104 @@ TEST(GolfShotTest, BadRequestsNameTheirField) {
   launch.mutable_launch()->set_launch_angle_deg(20);
   launch.mutable_launch()->set_spin_rpm(-5);
   EXPECT_THAT(Error(launch), HasSubstr("launch.spin_rpm"));
+}
+
+v1::SimulateGolfShotRequest OnLinks(int hole) {
+  v1::SimulateGolfShotRequest r;
+  r.set_course("sportsim_links");
+  r.set_hole(static_cast<uint32_t>(hole));
+  return r;
+}
+
+TEST(GolfShotTest, BadCourseRequestsNameTheirField) {
+  v1::SimulateGolfShotRequest r = OnLinks(9);
+  *r.mutable_putt() = Putt(1, 0).putt();
+  EXPECT_THAT(Error(r), HasSubstr("hole: 9 is not a hole of sportsim_links (1 to 3)"));
+  r = OnLinks(2);
+  *r.mutable_putt() = Putt(1, 0).putt();
+  r.set_tee("gold");
+  EXPECT_THAT(Error(r), HasSubstr("tee: \"gold\" is not a tee of hole 2 (white, red)"));
+  r.set_tee("white");
+  r.set_from_x_m(1);
+  EXPECT_THAT(Error(r), HasSubstr("tee: give a tee or from_x_m"));
+  r = OnLinks(1);
+  *r.mutable_putt() = Putt(1, 0).putt();
+  r.set_stimp_ft(11);
+  EXPECT_THAT(Error(r), HasSubstr("stimp_ft"));
+  r = OnLinks(1);
+  *r.mutable_putt() = Putt(1, 0).putt();
+  r.set_from_x_m(-158);
+  r.set_from_y_m(318);
+  EXPECT_THAT(Error(r), HasSubstr("out of bounds"));
+  r = Putt(1, 0);
+  r.set_hole(2);
+  EXPECT_THAT(Error(r), HasSubstr("hole, tee"));
+}
+
+// A shot on a course is PlayCourseShot's, to the bit: from the hole's tee by default, aimed at
+// the pin, the course's air; its rest, lie and events reach the response.
+TEST(GolfShotTest, ACourseShotIsTheLibrarysShot) {
+  const golf::Course& links = **golf::BuiltinCourse("sportsim_links");
+  v1::SimulateGolfShotRequest r = OnLinks(2);
+  r.set_tee("white");
+  v1::LaunchConditions* l = r.mutable_launch();
+  l->set_ball_speed_mps(50);
+  l->set_launch_angle_deg(17);
+  l->set_spin_rpm(7000);
+  absl::StatusOr<GolfShotJob> job = GolfShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  v1::SimulateGolfShotResponse out;
+  ASSERT_TRUE(RunGolfShot(*job, {}, &out).ok());
+  const golf::CourseHole& h2 = links.holes[1];
+  golf::CourseShot shot;
+  shot.hole = 2;
+  shot.from_m = h2.tees[0].position_m;
+  shot.aim_deg = std::atan2(h2.pin_m->y() - shot.from_m.y(), h2.pin_m->x() - shot.from_m.x()) /
+                 (std::numbers::pi / 180);
+  shot.launch = {.ball_speed_mps = 50, .launch_angle_deg = 17, .spin_rpm = 7000};
+  absl::StatusOr<golf::CourseShotResult> direct = golf::PlayCourseShot(links, shot);
+  ASSERT_TRUE(direct.ok()) << direct.status();
+  EXPECT_EQ(out.rest().x_m(), direct->ground.rest_m.x());
+  EXPECT_EQ(out.rest().y_m(), direct->ground.rest_m.y());
+  EXPECT_EQ(out.rest().lie(), golf::TerrainTag(direct->lie));
+  EXPECT_EQ(out.rest().distance_to_pin_m(), direct->distance_to_pin_m);
+  EXPECT_EQ(out.carry_m(), direct->flight->carry_m);
+  EXPECT_EQ(out.events_size(), static_cast<int>(direct->ground.events.size()));
+  EXPECT_EQ(out.events(0).kind(), "landing");
+  EXPECT_FALSE(out.events(0).surface().empty());
+  EXPECT_EQ(out.rest().surface(), direct->ground.rest_surface);
+  // The path starts on the tee's ground and ends at the rest.
+  ASSERT_GT(out.path_size(), 2);
+  EXPECT_NEAR(out.path(0).z_m(), links.terrain.HeightAt(shot.from_m.x(), shot.from_m.y()), 1e-9);
+}
+
+TEST(GolfShotTest, CoursesAreListedAndShown) {
+  const v1::ListCoursesResponse list = ListCourses();
+  ASSERT_EQ(list.courses_size(), 3);
+  EXPECT_EQ(list.courses(0).name(), "sportsim_links");
+  const v1::CourseInfo& links = list.courses(0);
+  ASSERT_EQ(links.holes_size(), 3);
+  EXPECT_EQ(links.holes(0).par() + links.holes(1).par() + links.holes(2).par(), 12u);
+  EXPECT_EQ(links.areas_size(), 0);  // no geometry in a list
+  EXPECT_GT(links.max_z_m() - links.min_z_m(), 5);
+  EXPECT_EQ(links.surfaces(0).name(), "tee");
+  v1::GetCourseRequest get;
+  get.set_name("sportsim_links");
+  get.set_hole(2);
+  get.set_geometry(true);
+  absl::StatusOr<v1::CourseInfo> one = GetCourse(get);
+  ASSERT_TRUE(one.ok()) << one.status();
+  ASSERT_EQ(one->holes_size(), 1);
+  EXPECT_EQ(one->holes(0).number(), 2u);
+  EXPECT_EQ(one->holes(0).par(), 3u);
+  EXPECT_GT(one->areas_size(), 10);
+  EXPECT_EQ(one->heightfield().z_m_size(),
+            static_cast<int>(one->heightfield().columns() * one->heightfield().rows()));
+  get.set_name("augusta");
+  EXPECT_EQ(GetCourse(get).status().code(), absl::StatusCode::kNotFound);
+  get.set_name("sportsim_links");
+  get.set_hole(4);
+  EXPECT_EQ(GetCourse(get).status().code(), absl::StatusCode::kInvalidArgument);
 }
 
 // A putt on practice is the library's putt from the same point: the same rest to the bit; a
@@ -258,6 +357,24 @@ TEST(GolfShotTest, OverGrpc) {
   const grpc::Status bad = stub->SimulateGolfShot(&ctx2, r, &resp);
   EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_THAT(bad.error_message(), HasSubstr("putt.direction_deg"));
+  // The courses, and a shot on one.
+  grpc::ClientContext ctx3, ctx4, ctx5;
+  v1::ListCoursesResponse list;
+  ASSERT_TRUE(stub->ListCourses(&ctx3, v1::ListCoursesRequest(), &list).ok());
+  EXPECT_EQ(list.SerializeAsString(), ListCourses().SerializeAsString());
+  v1::GetCourseRequest get;
+  get.set_name("nowhere");
+  v1::CourseInfo info;
+  EXPECT_EQ(stub->GetCourse(&ctx4, get, &info).error_code(), grpc::StatusCode::NOT_FOUND);
+  v1::SimulateGolfShotRequest on = OnLinks(1);
+  *on.mutable_roll() = Putt(3, 0).putt();
+  on.set_from_x_m(300);
+  on.set_from_y_m(0);
+  v1::SimulateGolfShotResponse remote_roll, local_roll;
+  ASSERT_TRUE(stub->SimulateGolfShot(&ctx5, on, &remote_roll).ok());
+  ASSERT_TRUE(RunGolfShot(*GolfShotJobFromProto(on), {}, &local_roll).ok());
+  local_roll.set_cpu_s(remote_roll.cpu_s());
+  EXPECT_EQ(remote_roll.SerializeAsString(), local_roll.SerializeAsString());
   (*app)->Shutdown(absl::Seconds(1));
 }
 
