@@ -102,6 +102,7 @@ int RunHealth(const Context& ctx, const std::vector<std::string>& args);
 int RunSwing(const Context& ctx, const std::vector<std::string>& args);
 int RunFlight(const Context& ctx, const std::vector<std::string>& args);
 int RunGolf(const Context& ctx, const std::vector<std::string>& args);
+int RunCourse(const Context& ctx, const std::vector<std::string>& args);
 int RunShot(const Context& ctx, const std::vector<std::string>& args);
 int RunTable(const Context& ctx, const std::vector<std::string>& args);
 

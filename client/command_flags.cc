@@ -317,14 +317,16 @@ std::vector<CommandSpec> MakeSpecs() {
        /*series=*/true, /*stream=*/false, flight_refusals},
       {"golf", "simulate", "(a launch | --putt-speed MPS | --roll-speed MPS)",
        "a golf shot to rest on the ground: bounces, spin-back, skid, roll, slope and hole",
-       Join({{{"course", "practice (a plane green, hole at the origin; the default) or range (a "
-                         "flat fairway)"},
+       Join({{{"course", "practice (a plane green, hole at the origin; the default), range (a "
+                         "flat fairway) or a course of `course list`"},
+              {"hole", "a course's hole, 1-based (default 1)"},
+              {"tee", "a course's tee by name (default the hole's first; not with --from)"},
               {"stimp", "practice: the green's Stimpmeter speed, [1, 20] ft (default 10)"},
               {"slope_pct", "practice: the green's grade, [0, 20] %, no steeper than the green "
                             "holds a ball (default 0)"},
               {"slope_toward_deg", "practice: heading the fall line points toward (deg)"},
               {"fairway", "range: firm, normal or soft (default normal)"},
-              {"flagstick", "practice: the flagstick (19.05 mm) is in the hole"},
+              {"flagstick", "practice or a course: the flagstick (19.05 mm) is in the hole"},
               {"from", "the ball's position X,Y in metres (default -10,0 on practice, 0,0 on "
                        "the range)"},
               {"aim_deg", "a launch's target line, heading in deg (default toward the pin, or "
@@ -339,8 +341,13 @@ std::vector<CommandSpec> MakeSpecs() {
               {"roll_direction_deg", "the rolling ball's heading (deg, ccw from +x; default 0)"}},
              AirFlags(),
              {{"disable", "ground effects to switch off: ground_spin, ground_slope"},
-              {"svg", "the path from above, with the hole, bounces and rest"}}}),
+              {"svg", "the path from above, with the hole, bounces and rest (on a course: "
+                      "over its surfaces and elevation)"}}}),
        /*series=*/true, /*stream=*/false, flight_refusals},
+      {"course", "list", "", "the server's golf courses: holes, pars, lengths", NoFlags()},
+      {"course", "show", "NAME", "a golf course's holes, tees, pins and surfaces",
+       {{"hole", "only this hole (1-based); --svg frames it"},
+        {"svg", "the course from above: surfaces, elevation, tees and pins"}}},
   };
 }
 

@@ -1,4 +1,4 @@
-// `sportsim golf ...`: a golf shot to rest on a practice course (SimulateGolfShot).
+// `sportsim golf ...`: a golf shot to rest on a practice course or a course (SimulateGolfShot).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +16,7 @@
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
+#include "client/course_svg.h"
 #include "client/swing_flags.h"
 #include "client/table_svg.h"
 #include "sportsim/v1/swing.grpc.pb.h"
@@ -31,7 +32,10 @@ ABSL_DECLARE_FLAG(std::vector<std::string>, disable);
 ABSL_DECLARE_FLAG(std::string, svg);
 
 ABSL_FLAG(std::string, course, "practice",
-          "golf: practice (a plane green, hole at the origin) or range (a flat fairway)");
+          "golf: practice (a plane green, hole at the origin), range (a flat fairway) or a "
+          "course of `course list`");
+ABSL_FLAG(std::optional<int>, hole, std::nullopt, "golf: a course's hole (1-based; default 1)");
+ABSL_FLAG(std::string, tee, "", "golf: a course's tee by name (default the hole's first)");
 ABSL_FLAG(std::optional<double>, stimp, std::nullopt, "golf practice: green speed (ft); default 10");
 ABSL_FLAG(double, slope_pct, 0.0, "golf practice: the green's grade along its fall line (%)");
 ABSL_FLAG(double, slope_toward_deg, 0.0,
@@ -59,6 +63,14 @@ std::optional<std::string> BuildRequest(v1::SimulateGolfShotRequest* r) {
   r->set_slope_toward_deg(absl::GetFlag(FLAGS_slope_toward_deg));
   r->set_fairway(absl::GetFlag(FLAGS_fairway));
   r->set_flagstick(absl::GetFlag(FLAGS_flagstick));
+  if (auto h = absl::GetFlag(FLAGS_hole)) {
+    if (*h < 1 || *h > 36) return InvalidValue(absl::StrFormat("--hole: must be in [1, 36], got %d", *h));
+    r->set_hole(static_cast<uint32_t>(*h));
+  }
+  r->set_tee(absl::GetFlag(FLAGS_tee));
+  if (!r->tee().empty() && !absl::GetFlag(FLAGS_from).empty()) {
+    return "give --tee or --from, not both";
+  }
   if (const std::string from = absl::GetFlag(FLAGS_from); !from.empty()) {
     const std::vector<std::string> xy = absl::StrSplit(from, ',');
     double x = 0, y = 0;
@@ -120,9 +132,21 @@ void PrintText(const v1::SimulateGolfShotResponse& r) {
   }
   if (rest.holed()) {
     std::printf("holed at %.2f s\n", r.t_rest_s());
+  } else if (rest.out_of_bounds()) {
+    std::printf("out of bounds at (%.2f, %.2f) m after %.2f s\n", rest.x_m(), rest.y_m(),
+                r.t_rest_s());
+  } else if (rest.penalty_area()) {
+    std::printf("in the %s (a penalty area), entered at (%.2f, %.2f) m after %.2f s\n",
+                rest.surface() == "lateral_water_hazard" ? "red penalty area's water"
+                                                         : "yellow penalty area's water",
+                rest.x_m(), rest.y_m(), r.t_rest_s());
   } else {
-    std::printf("at rest on the %s at (%.2f, %.2f, %.3f) m after %.2f s", rest.surface().c_str(),
-                rest.x_m(), rest.y_m(), rest.z_m(), r.t_rest_s());
+    const std::string lie = !rest.lie().empty() && rest.lie() != rest.surface()
+                                ? " (its lie: " + rest.lie() + ")"
+                                : "";
+    std::printf("at rest on the %s%s at (%.2f, %.2f, %.3f) m after %.2f s",
+                rest.surface().c_str(), lie.c_str(), rest.x_m(), rest.y_m(), rest.z_m(),
+                r.t_rest_s());
     if (rest.has_distance_to_pin_m()) {
       std::printf(", %.2f m (%.1f ft) from the pin", rest.distance_to_pin_m(),
                   rest.distance_to_pin_m() / 0.3048);
@@ -130,8 +154,9 @@ void PrintText(const v1::SimulateGolfShotResponse& r) {
     std::printf("\n");
   }
   for (const v1::GolfEvent& e : r.events()) {
-    std::printf("  %7.3f s  %-8s (%8.2f, %8.2f, %6.3f) m  %6.2f m/s  %6.0f rpm\n", e.t_s(),
-                e.kind().c_str(), e.x_m(), e.y_m(), e.z_m(), e.speed_mps(), e.spin_rpm());
+    std::printf("  %7.3f s  %-13s (%8.2f, %8.2f, %6.3f) m  %6.2f m/s  %6.0f rpm  %s\n", e.t_s(),
+                e.kind().c_str(), e.x_m(), e.y_m(), e.z_m(), e.speed_mps(), e.spin_rpm(),
+                e.surface().c_str());
   }
   std::printf("%u bounces; %.3f ms CPU\n", r.bounces(), r.cpu_s() * 1e3);
 }
@@ -223,8 +248,22 @@ int RunSimulate(const Context& ctx, const std::vector<std::string>& args) {
   const grpc::Status status = stub->SimulateGolfShot(ctx.NewCall().get(), request, &response);
   if (!status.ok()) return ReportRpcError(status);
   if (const std::string svg = absl::GetFlag(FLAGS_svg); !svg.empty()) {
+    const std::string& course = request.course();
+    std::string drawing;
+    if (course.empty() || course == "practice" || course == "range") {
+      drawing = ShotSvg(response, request);
+    } else {
+      v1::GetCourseRequest get;
+      get.set_name(course);
+      get.set_geometry(true);
+      v1::CourseInfo info;
+      const grpc::Status got = stub->GetCourse(ctx.NewCall().get(), get, &info);
+      if (!got.ok()) return ReportRpcError(got);
+      drawing = CourseSvg(info, request.hole() == 0 ? 1 : static_cast<int>(request.hole()),
+                          &response);
+    }
     std::ofstream out(svg);
-    out << ShotSvg(response, request);
+    out << drawing;
     if (!out) return UsageError("cannot write --svg file '" + svg + "'");
   }
   return PrintResponse(ctx, response, PrintCsv, PrintText);

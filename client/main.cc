@@ -62,14 +62,18 @@ Commands:
       [--pressure-pa PA] [--humidity F] [--altitude-m M] [--dt S] [--sample-interval S]
       [--disable drag,lift,spin_decay,wind] [--aero ferguson2022|nathan] [--svg FILE]
       (RK4 at --dt: the flight takes no --integrator, --tolerance or --max-step)
-  golf simulate [flags]     a golf shot to rest on the ground: [--course practice|range]
+  golf simulate [flags]     a golf shot to rest on the ground: [--course practice|range|NAME]
       (practice: [--stimp FT] [--slope-pct P --slope-toward-deg D], hole at the origin;
-      range: [--fairway firm|normal|soft]) [--from X,Y] and one of: a launch (--ball-speed
+      range: [--fairway firm|normal|soft]; a course of `course list`: [--hole N] [--tee NAME],
+      its terrain, surfaces, pin and air) [--from X,Y] and one of: a launch (--ball-speed
       MPS --launch-deg DEG --spin-rpm RPM [--spin-axis-deg DEG] [--launch-direction-deg DEG]
       [--aim-deg DEG] [air flags of flight simulate]), a putt (--putt-speed MPS
       [--putt-direction-deg DEG]) or a rolling ball (--roll-speed MPS [--roll-direction-deg
       DEG]); [--disable ground_spin,ground_slope] [--sample-interval S] [--svg FILE] (the path
       from above)
+  course list               the server's golf courses: holes, pars, lengths
+  course show NAME [--hole N] [--svg FILE]   a course's holes (tees, pin, par, stroke index,
+      length), its surfaces' constants; --svg draws it from above (surfaces, elevation)
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
       --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
       [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]
@@ -529,6 +533,8 @@ int RunInfo(const Context& ctx, const std::vector<std::string>& args) {
             << "  swing integrators:     " << list(c.swing_integrators()) << "\n"
             << "  swing effects:         " << list(c.swing_effects()) << "\n"
             << "  services:              " << list(c.services()) << "\n"
+            << "  golf courses:          " << list(c.golf_courses()) << "\n"
+            << "  golf surfaces:         " << list(c.golf_surfaces()) << "\n"
             << "  billiards parameters (pool-9ft defaults):\n";
   const auto print_params = [](const auto& params) {
     for (const v1::ParameterInfo& p : params) {
@@ -591,7 +597,7 @@ int main(int argc, char** argv) {
     if (!text) {
       return UsageError("no help for '" + positional[0] +
                         (positional.size() > 1 ? " " + positional[1] : std::string()) +
-                        "' (commands: info, health, swing, flight, golf, shot, table)");
+                        "' (commands: info, health, swing, flight, golf, course, shot, table)");
     }
     std::cout << *text;
     return 0;
@@ -612,7 +618,7 @@ int main(int argc, char** argv) {
   else return UsageError("--format: must be text, json, jsonl or csv, got '" + format + "'");
 
   if (positional.empty()) {
-    return UsageError("give a command: info, health, swing, flight, golf, shot or table (sportsim "
+    return UsageError("give a command: info, health, swing, flight, golf, course, shot or table (sportsim "
                       "--help lists them)");
   }
   const std::string command = positional[0];
@@ -642,8 +648,9 @@ int main(int argc, char** argv) {
   if (command == "swing") return RunSwing(ctx, rest);
   if (command == "flight") return RunFlight(ctx, rest);
   if (command == "golf") return RunGolf(ctx, rest);
+  if (command == "course") return RunCourse(ctx, rest);
   if (command == "shot") return RunShot(ctx, rest);
   if (command == "table") return RunTable(ctx, rest);
   return UsageError("unknown command '" + command +
-                    "' (info, health, swing, flight, golf, shot, table)");
+                    "' (info, health, swing, flight, golf, course, shot, table)");
 }

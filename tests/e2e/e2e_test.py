@@ -124,6 +124,67 @@ class CliAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 64)
         self.assertIn("needs --ball-speed, --launch-deg and --spin-rpm", r.stderr)
 
+    def test_course_list_and_show_json_contract(self):
+        r = cli(self.server.address, "--format", "json", "course", "list")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        names = [c["name"] for c in json.loads(r.stdout)["courses"]]
+        self.assertEqual(names[0], "sportsim_links")
+        self.assertIn("practice", names)
+        r = cli(self.server.address, "--format", "json", "course", "show", "sportsim_links")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        course = json.loads(r.stdout)
+        self.assertEqual(course["name"], "sportsim_links")
+        self.assertEqual(sorted(h["par"] for h in course["holes"]), [3, 4, 5])
+        for hole in course["holes"]:
+            for key in ("number", "par", "stroke_index", "tees", "pin", "length_m"):
+                self.assertIn(key, hole)
+            self.assertEqual(set(hole["pin"]), {"x_m", "y_m", "z_m"})
+            self.assertEqual(set(hole["tees"][0]), {"name", "x_m", "y_m", "z_m"})
+        self.assertIn("green", [s["name"] for s in course["surfaces"]])
+        r = cli(self.server.address, "--format", "json", "course", "show", "sportsim_links",
+                "--hole", "2")
+        self.assertEqual([h["number"] for h in json.loads(r.stdout)["holes"]], [2])
+        with tempfile.TemporaryDirectory() as d:
+            svg = os.path.join(d, "course.svg")
+            r = cli(self.server.address, "course", "show", "sportsim_links", "--hole", "3",
+                    "--svg", svg)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("hole 3: par 5", r.stdout)
+            root = ET.parse(svg).getroot()
+            titles = {t.text for t in root.iter(SVG_NS + "title")}
+            self.assertTrue({"green", "bunker", "water_hazard", "lateral_water_hazard"} <= titles)
+        r = cli(self.server.address, "course", "show", "augusta")
+        self.assertEqual(r.returncode, 5, r.stderr)  # NOT_FOUND
+        self.assertIn("NOT_FOUND", r.stderr)
+
+    def test_golf_simulate_on_a_course(self):
+        r = cli(self.server.address, "--format", "json", "golf", "simulate", "--course",
+                "sportsim_links", "--hole", "2", "--tee", "white", "--ball-speed", "33",
+                "--launch-deg", "17", "--spin-rpm", "7000")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        out = json.loads(r.stdout)
+        for key in ("carry_m", "total_m", "lateral_m", "t_rest_s", "rest", "events", "flight",
+                    "cpu_s"):
+            self.assertIn(key, out)
+        self.assertEqual(out["rest"]["lie"], "water_hazard")  # short, into the pond
+        self.assertTrue(out["rest"]["penalty_area"])
+        self.assertIn("penalty_area", [e["kind"] for e in out["events"]])
+        with tempfile.TemporaryDirectory() as d:
+            svg = os.path.join(d, "shot.svg")
+            r = cli(self.server.address, "golf", "simulate", "--course", "sportsim_links",
+                    "--hole", "1", "--ball-speed", "70", "--launch-deg", "12", "--spin-rpm",
+                    "2800", "--svg", svg)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("carry", r.stdout)
+            root = ET.parse(svg).getroot()
+            self.assertEqual(len(list(root.iter(SVG_NS + "polyline"))), 1)
+        for args, message in ((("--tee", "gold"), "tee"), (("--hole", "7"), "hole"),
+                              (("--tee", "white", "--from", "1,2"), "--tee or --from")):
+            r = cli(self.server.address, "golf", "simulate", "--course", "sportsim_links",
+                    "--putt-speed", "1", *args)
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn(message, r.stderr)
+
     def test_info_lists_billiards(self):
         r = cli(self.server.address, "info", "--format", "json")
         self.assertEqual(r.returncode, 0, r.stderr)
