@@ -1,13 +1,15 @@
 // CPU of the golf ball's ground phase per shot beside its flight's: a tour drive and a tour
 // 7-iron (flight, then bounces and roll on the normal fairway), and putts of 3 and 10 m on a
 // Stimp 10 green, flat and across a 2 % slope (RK4 on the ground at 1, 2 and 5 ms, the
-// default; a flat green needs no steps). Flights at their default (RK4, 1 ms), no samples. Results:
+// default; a flat green needs no steps); and on sportsim_links a drive from the first tee and a
+// 10 m putt on its green. Flights at their default (RK4, 1 ms), no samples. Results:
 // docs/golf-ground.md.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 
 #include "sim/golf/ball_flight.h"
+#include "sim/golf/course_shot.h"
 #include "sim/golf/ground.h"
 #include "sim/golf/surface.h"
 
@@ -73,6 +75,36 @@ BENCHMARK(BM_Putt)
     ->Args({10, 2, 2000})
     ->Args({10, 2, 5000})
     ->Unit(benchmark::kMicrosecond);
+
+// On sportsim_links (terrain, surfaces, the pin): Arg 0, the tour drive from the first tee
+// (launch to rest, the flight over the terrain included); Arg 1, a 10 m putt on the first
+// green; Arg 2, the same putt with dp45 at 1e-6 m. Beside them on the plane: BM_Flight plus
+// BM_GroundAfterFlight, and BM_Putt.
+void BM_CourseShot(benchmark::State& state) {
+  const Course& links = **BuiltinCourse("sportsim_links");
+  const Eigen::Vector2d pin = *links.holes[0].pin_m;
+  CourseShot shot;
+  shot.hole = 1;
+  shot.ground.sample_interval_s = 0;
+  shot.flight.sample_interval_s = 0;
+  if (state.range(0) == 0) {
+    shot.kind = CourseShot::Kind::kLaunch;
+    shot.from_m = links.holes[0].tees[0].position_m;
+    shot.aim_deg = std::atan2(pin.y() - shot.from_m.y(), pin.x() - shot.from_m.x()) * 180 / M_PI;
+    shot.launch = Launch(0);
+  } else {
+    shot.kind = CourseShot::Kind::kPutt;
+    shot.from_m = pin + Eigen::Vector2d(-10, 0.5);
+    shot.speed_mps = 3.4;
+    if (state.range(0) == 2) {
+      shot.ground.integrator = ode::Integrator::kDp45;
+      shot.ground.tolerance_m = 1e-6;
+      shot.ground.dt_s = 0.05;
+    }
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(PlayCourseShot(links, shot));
+}
+BENCHMARK(BM_CourseShot)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace sportsim::golf

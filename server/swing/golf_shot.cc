@@ -105,6 +105,7 @@ absl::Status CourseFromProto(const v1::SimulateGolfShotRequest& r, GolfShotJob* 
   if (std::hypot(job->from_x_m - pin.x(), job->from_y_m - pin.y()) <= 0.5 * job->hole.diameter_m) {
     return absl::InvalidArgumentError("from_x_m, from_y_m: the ball would start in the hole");
   }
+  job->ground = golf::CourseGroundOptions();  // effects and samples are set below
   job->has_hole = true;
   job->hole.x_m = pin.x();
   job->hole.y_m = pin.y();

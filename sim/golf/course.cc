@@ -135,23 +135,87 @@ bool Heightfield::Covers(double x, double y) const {
   return x >= x0_m && x <= x1_m() && y >= y0_m && y <= y1_m();
 }
 
-void Heightfield::At(double x, double y, double* z, Vector3d* normal) const {
+namespace {
+
+// Catmull-Rom's cubic weights at t in [0, 1] for the samples at -1, 0, 1, 2, and their first
+// and second derivatives in t.
+struct CubicWeights {
+  double w[4], d[4], dd[4];
+  explicit CubicWeights(double t) {
+    const double t2 = t * t, t3 = t2 * t;
+    w[0] = 0.5 * (-t + 2 * t2 - t3);
+    w[1] = 0.5 * (2 - 5 * t2 + 3 * t3);
+    w[2] = 0.5 * (t + 4 * t2 - 3 * t3);
+    w[3] = 0.5 * (-t2 + t3);
+    d[0] = 0.5 * (-1 + 4 * t - 3 * t2);
+    d[1] = 0.5 * (-10 * t + 9 * t2);
+    d[2] = 0.5 * (1 + 8 * t - 9 * t2);
+    d[3] = 0.5 * (-2 * t + 3 * t2);
+    dd[0] = 0.5 * (4 - 6 * t);
+    dd[1] = 0.5 * (-10 + 18 * t);
+    dd[2] = 0.5 * (8 - 18 * t);
+    dd[3] = 0.5 * (-2 + 6 * t);
+  }
+};
+
+}  // namespace
+
+double Heightfield::Z(int i, int j) const {
+  // Beyond the grid, linear extrapolation from the edge (a plane stays a plane).
+  if (i < 0) return 2 * Z(0, j) - Z(1, j);
+  if (i >= columns) return 2 * Z(columns - 1, j) - Z(columns - 2, j);
+  if (j < 0) return 2 * Z(i, 0) - Z(i, 1);
+  if (j >= rows) return 2 * Z(i, rows - 1) - Z(i, rows - 2);
+  return z_m[static_cast<size_t>(j) * columns + i];
+}
+
+void Heightfield::Sample(double x, double y, double* z, Eigen::Vector2d* gradient,
+                         Eigen::Matrix2d* hessian) const {
   const double u = (x - x0_m) / spacing_m;
   const double v = (y - y0_m) / spacing_m;
   const int i = static_cast<int>(std::clamp(std::floor(u), 0.0, static_cast<double>(columns - 2)));
   const int j = static_cast<int>(std::clamp(std::floor(v), 0.0, static_cast<double>(rows - 2)));
-  const double fx = std::clamp(u - i, 0.0, 1.0);
-  const double fy = std::clamp(v - j, 0.0, 1.0);
-  const size_t k = static_cast<size_t>(j) * columns + i;
-  const double z00 = z_m[k], z10 = z_m[k + 1], z01 = z_m[k + columns], z11 = z_m[k + columns + 1];
-  if (z != nullptr) {
-    *z = (1 - fy) * ((1 - fx) * z00 + fx * z10) + fy * ((1 - fx) * z01 + fx * z11);
+  const CubicWeights wx(std::clamp(u - i, 0.0, 1.0)), wy(std::clamp(v - j, 0.0, 1.0));
+  // The 4 x 4 samples around the cell: straight from the grid inside it, extended at its edges.
+  double p16[4][4];
+  if (i >= 1 && i + 2 < columns && j >= 1 && j + 2 < rows) {
+    for (int b = 0; b < 4; ++b) {
+      const double* row = &z_m[static_cast<size_t>(j - 1 + b) * columns + (i - 1)];
+      for (int a = 0; a < 4; ++a) p16[b][a] = row[a];
+    }
+  } else {
+    for (int b = 0; b < 4; ++b) {
+      for (int a = 0; a < 4; ++a) p16[b][a] = Z(i - 1 + a, j - 1 + b);
+    }
   }
-  if (normal != nullptr) {
-    const double dzdx = ((1 - fy) * (z10 - z00) + fy * (z11 - z01)) / spacing_m;
-    const double dzdy = ((1 - fx) * (z01 - z00) + fx * (z11 - z10)) / spacing_m;
-    *normal = Vector3d(-dzdx, -dzdy, 1.0).normalized();
+  double h = 0, hx = 0, hy = 0, hxx = 0, hyy = 0, hxy = 0;
+  for (int b = 0; b < 4; ++b) {
+    double r = 0, rx = 0, rxx = 0;  // along x, in row j - 1 + b
+    for (int a = 0; a < 4; ++a) {
+      const double p = p16[b][a];
+      r += wx.w[a] * p;
+      rx += wx.d[a] * p;
+      rxx += wx.dd[a] * p;
+    }
+    h += wy.w[b] * r;
+    hx += wy.w[b] * rx;
+    hxx += wy.w[b] * rxx;
+    hy += wy.d[b] * r;
+    hyy += wy.dd[b] * r;
+    hxy += wy.d[b] * rx;
   }
+  const double s = spacing_m;
+  if (z != nullptr) *z = h;
+  if (gradient != nullptr) *gradient = Eigen::Vector2d(hx / s, hy / s);
+  if (hessian != nullptr) {
+    *hessian << hxx / (s * s), hxy / (s * s), hxy / (s * s), hyy / (s * s);
+  }
+}
+
+void Heightfield::At(double x, double y, double* z, Vector3d* normal) const {
+  Eigen::Vector2d grad;
+  Sample(x, y, z, normal != nullptr ? &grad : nullptr, nullptr);
+  if (normal != nullptr) *normal = Vector3d(-grad.x(), -grad.y(), 1.0).normalized();
 }
 
 double Heightfield::HeightAt(double x, double y) const {

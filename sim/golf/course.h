@@ -5,8 +5,10 @@
 //
 // Frame: x east, y north, z up, metres; headings in degrees counter-clockwise from +x.
 //
-// Terrain: heights on a regular grid, interpolated bilinearly within each cell (a plane is
-// reproduced exactly; the normal is the bilinear patch's, continuous inside a cell).
+// Terrain: heights on a regular grid, interpolated by Catmull-Rom bicubic patches: the height
+// and its slope are continuous everywhere (C1: a rolling ball meets no kinks), the curvature is
+// continuous inside a cell and jumps at its edges; the patches pass through the samples and
+// reproduce a plane exactly (beyond the grid's edge the samples are extended linearly).
 //
 // Surfaces: each area is a polygon with a class (golf=tee|fairway|rough|bunker|green|
 // water_hazard|lateral_water_hazard|cartpath|out_of_bounds as OpenStreetMap tags them, and our
@@ -74,12 +76,18 @@ struct Heightfield {
   double x1_m() const { return x0_m + spacing_m * (columns - 1); }
   double y1_m() const { return y0_m + spacing_m * (rows - 1); }
   bool Covers(double x, double y) const;
-  /// Bilinear height; outside the grid, the nearest edge's.
+  /// The height; outside the grid, the nearest edge's.
   double HeightAt(double x, double y) const;
-  /// The unit upward normal of the bilinear patch at (x, y) (the nearest edge's outside).
+  /// The unit upward normal at (x, y) (the nearest edge's outside).
   Eigen::Vector3d NormalAt(double x, double y) const;
   /// HeightAt and NormalAt in one lookup.
   void At(double x, double y, double* z, Eigen::Vector3d* normal) const;
+  /// The height, its gradient (dz/dx, dz/dy) and its Hessian at (x, y), each optional.
+  void Sample(double x, double y, double* z, Eigen::Vector2d* gradient,
+              Eigen::Matrix2d* hessian) const;
+
+ private:
+  double Z(int column, int row) const;  // a sample, extended linearly beyond the grid
 };
 
 /// An area of one surface class.

@@ -47,7 +47,8 @@ struct CourseShot {
   std::optional<Wind> wind;
   FlightOptions flight;  ///< its launch_height_m and sample_interval_s are set here
   Hole hole_spec;        ///< the hole's size and flagstick (its x_m, y_m: the pin's)
-  GroundOptions ground;  ///< its sample_interval_s also spaces the flight's path points
+  /// Its sample_interval_s also spaces the flight's path points. Default: dp45 at 1e-8 m.
+  GroundOptions ground = CourseGroundOptions();
 };
 
 struct CourseShotResult {

@@ -12,6 +12,7 @@
 #include "sim/core/check.h"
 #include "sim/core/effects.h"
 #include "sim/core/ode/integrator.h"
+#include "sim/core/ode/runge_kutta.h"
 
 namespace sportsim::golf {
 
@@ -71,6 +72,9 @@ class Ground {
   struct Local {
     double z = 0.0;
     Vector3d n = Vector3d::UnitZ();
+    // The height's Hessian times n_z: u^T curv u is the normal acceleration of a point moving
+    // over the ground at horizontal velocity u (zero on a plane).
+    Eigen::Matrix2d curv = Eigen::Matrix2d::Zero();
   };
   virtual ~Ground() = default;
   virtual Local At(double x, double y) const = 0;
@@ -121,7 +125,11 @@ class CourseGround final : public Ground {
   }
   Local At(double x, double y) const override {
     Local l;
-    course_.terrain.At(x, y, &l.z, &l.n);
+    Eigen::Vector2d grad;
+    Eigen::Matrix2d hess;
+    course_.terrain.Sample(x, y, &l.z, &grad, &hess);
+    l.n = Vector3d(-grad.x(), -grad.y(), 1.0).normalized();
+    l.curv = hess * l.n.z();
     return l;
   }
   int ZoneAt(double x, double y) const override {
@@ -158,6 +166,13 @@ struct Frame {
   Vector3d g_t;  // gravity along the ground (zero when the slope is switched off)
   Vector3d fall; // unit fall line (any tangent on the flat)
   double g_n = 0.0;  // gravity's normal part, g n_z
+  Eigen::Matrix2d curv = Eigen::Matrix2d::Zero();  // Ground::Local::curv
+
+  // The ground's normal acceleration of a ball moving at v over it (its curvature along the
+  // path times v^2), and the normal force per unit mass that holds the ball to it: N = g_n +
+  // that. The ball leaves the ground where N < 0.
+  double Bend(const Vector3d& v) const { return v.head<2>().dot(curv * v.head<2>()); }
+  double Normal(const Vector3d& v) const { return g_n + Bend(v); }
 };
 
 // What the run needs of the inputs, resolved once.
@@ -187,13 +202,22 @@ struct StepOut {
   Vector3d s;
   double step = 0.0;
   bool transition = false;
+  double error = 0.0;  // dp45: the step's scaled error estimate (<= 1 meets the tolerance)
 };
+
+// dp45's error scale: positions against tolerance_m, velocities and slips as the position
+// error they make over kErrorHorizon.
+constexpr double kErrorHorizon = 0.1;  // s
+constexpr double kMinAdaptiveStep = 1e-7;  // s
+// The zone is probed along each step at least this often (m).
+constexpr double kZoneProbe = 0.02;
 
 class Run {
  public:
   Run(const Env& env, const Ground& ground, const GroundOptions& options)
-      : e_(env), ground_(ground), options_(options), plane_(ground.IsPlane()) {
-    if (plane_) plane_frame_ = MakeFrame(ground.At(0.0, 0.0).n);
+      : e_(env), ground_(ground), options_(options), plane_(ground.IsPlane()),
+        dp45_(options.integrator == ode::Integrator::kDp45), h_adapt_(options.dt_s) {
+    if (plane_) plane_frame_ = MakeFrame(ground.At(0.0, 0.0));
   }
 
   absl::StatusOr<GroundResult> Go(const GroundStart& start);
@@ -201,34 +225,43 @@ class Run {
  private:
   enum class Next { kDone, kGround, kHop, kImpact };
 
-  Frame MakeFrame(const Vector3d& n) const {
+  Frame MakeFrame(const Ground::Local& l) const {
+    const Vector3d& n = l.n;
     Frame f;
     f.n = n;
+    f.curv = l.curv;
     f.g_n = -e_.g.z() * n.z();
     const Vector3d gt = e_.g - e_.g.dot(n) * n;
     f.fall = Unit(gt, Vector3d::UnitX());
     f.g_t = e_.slope ? gt : Vector3d::Zero();
     return f;
   }
-  // The frame and the normal where a ball centred at c touches the ground (Under).
-  Frame FrameAt(const Vector3d& c) const { return plane_ ? plane_frame_ : MakeFrame(Under(c).n); }
+  // The normal where a ball centred at c touches the ground (Under) is NormalAt's.
+  // The dynamics take the ground under the centre (one lookup; the touch point lies R sin(slope)
+  // from it, and the difference is smooth, so it costs no order of accuracy).
+  Frame FrameAt(const Vector3d& c) const {
+    return plane_ ? plane_frame_ : MakeFrame(ground_.At(c.x(), c.y()));
+  }
   Vector3d NormalAt(const Vector3d& c) const { return plane_ ? plane_frame_.n : Under(c).n; }
   // The ground point the ball touches, Q, and the normal there: Q + R n(Q) is the centre's
   // nearest ground point condition, solved by fixed-point iteration from below the centre
   // (exact in one on a plane; on terrain a few millimetres' correction near grid kinks).
   struct Touch {
     Vector3d q, n;
+    Ground::Local l;
   };
   Touch Under(const Vector3d& c) const {
-    if (plane_) return {c - e_.radius * plane_frame_.n, plane_frame_.n};
+    if (plane_) {
+      return {c - e_.radius * plane_frame_.n, plane_frame_.n, Ground::Local{0.0, plane_frame_.n}};
+    }
     Ground::Local l = ground_.At(c.x(), c.y());
     double x = c.x(), y = c.y();
-    for (int i = 0; i < 3; ++i) {
+    for (int i = 0; i < 2; ++i) {
       x = c.x() - e_.radius * l.n.x();
       y = c.y() - e_.radius * l.n.y();
       l = ground_.At(x, y);
     }
-    return {Vector3d(x, y, l.z), l.n};
+    return {Vector3d(x, y, l.z), l.n, l};
   }
   // How far the ball's surface is above the ground (m; < 0: into it).
   double Clearance(const Vector3d& c) const {
@@ -342,6 +375,19 @@ class Run {
                    double te);
   // One step of at most h from (from, s0): pure.
   StepOut Advance(const Ball& from, const Vector3d& s0, bool rolling, double h) const;
+  // One Dormand-Prince 5(4) step of y' = g(y) (autonomous; positions first, then rates) and its
+  // scaled error (kErrorHorizon).
+  template <typename Vec, typename G>
+  Vec Dp45(G&& g, const Vec& y0, double h, double* error) const {
+    const Vec k1 = g(0.0, y0);
+    ode::Dp45Stages<Vec> st;
+    const Vec y1 = ode::Dp45Solution(g, 0.0, h, y0, k1, &st, h);
+    const Vec err = ode::Dp45Error(h, k1, st, g(h, y1));
+    double e = err.template head<3>().template lpNorm<Eigen::Infinity>();
+    for (int i = 3; i < err.size(); ++i) e = std::max(e, kErrorHorizon * std::abs(err[i]));
+    *error = std::isfinite(e) ? e / options_.tolerance_m : std::numeric_limits<double>::infinity();
+    return y1;
+  }
   // The skid and the roll to rest, into the hole, off the ground (kHop, kImpact) or out.
   absl::StatusOr<Next> OnGround();
 
@@ -349,6 +395,8 @@ class Run {
   const Ground& ground_;
   const GroundOptions& options_;
   const bool plane_;
+  const bool dp45_;    // error-controlled steps on the ground (else RK4 at dt_s)
+  double h_adapt_;     // dp45: the next step to try
   Frame plane_frame_;
   int zone_id_ = 0;
   const Zone* zone_ = nullptr;
@@ -584,18 +632,19 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
   const Frame f0 = FrameAt(from.c);
   const bool straight = ground_.IsUniform() && f0.g_t.squaredNorm() == 0.0;
   const double mu = surface().sliding_friction;
-  const double hold = surface().rolling_resistance * f0.g_n;  // the most the resistance holds
+  const double n0 = std::max(f0.Normal(from.v), 0.0);  // the ground's push at the start
+  const double hold = surface().rolling_resistance * n0;  // the most the resistance holds
   StepOut o{from, s0, h, false};
   Ball& b = o.b;
   if (!rolling) {
-    const double rate_slip = mu * f0.g_n * (1.0 + 1.0 / e_.k);
+    const double rate_slip = mu * n0 * (1.0 + 1.0 / e_.k);
     const Vector3d sh = s0 / s0.norm();
     const double r = rate_slip - f0.g_t.dot(sh);
     // Near its end the slip's direction turns ever faster (the slope's pull against a
     // vanishing slip): the steps shrink with the time left, half of it each, so each turns
     // the direction by a bounded angle, until the last piece is short.
     const double left = r > 0.0 ? s0.norm() / r : h;
-    const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
+    const double hs = straight || r <= 0.0 || left <= kLastPiece ? h : std::min(h, 0.5 * left);
     if (r > 0.0 && s0.norm() <= r * hs) {
       // The slip ends inside this step. v - k/(1+k) s moves at the constant rate g_t/(1+k)
       // (the friction terms cancel), so the velocity at the end of the slip is exact whatever
@@ -615,11 +664,35 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
       Vector3d c, v, s;
     };
     auto f = [&](const Vector3d& c, const Vector3d& v, const Vector3d& sl) {
-      const Frame fr = plane_ ? f0 : FrameAt(c);
-      const Vector3d u = Unit(sl, Vector3d::Zero());
-      return D{v, fr.g_t - mu * fr.g_n * u, fr.g_t - mu * fr.g_n * (1.0 + 1.0 / e_.k) * u};
+      if (plane_) {
+        const Vector3d u = Unit(sl, Vector3d::Zero());
+        return D{v, f0.g_t - mu * f0.g_n * u, f0.g_t - mu * f0.g_n * (1.0 + 1.0 / e_.k) * u};
+      }
+      // On terrain the ground bends the path (its normal acceleration) and pushes with N.
+      const Frame fr = FrameAt(c);
+      const double bend = fr.Bend(v);
+      const double push = std::max(fr.g_n + bend, 0.0);
+      const Vector3d u = Unit(sl - sl.dot(fr.n) * fr.n, Vector3d::Zero());
+      return D{v, fr.g_t + bend * fr.n - mu * push * u,
+               fr.g_t - mu * push * (1.0 + 1.0 / e_.k) * u};
     };
     o.step = hs;
+    if (dp45_) {
+      using V9 = Eigen::Matrix<double, 9, 1>;
+      auto g = [&](double, const V9& y) {
+        const D d = f(y.segment<3>(0), y.segment<3>(3), y.segment<3>(6));
+        V9 out;
+        out << d.c, d.v, d.s;
+        return out;
+      };
+      V9 y0;
+      y0 << b.c, b.v, s0;
+      const V9 y1 = Dp45(g, y0, hs, &o.error);
+      b.c = y1.segment<3>(0);
+      b.v = y1.segment<3>(3);
+      o.s = y1.segment<3>(6);
+      return o;
+    }
     const D k1 = f(b.c, b.v, s0);
     const D k2 = f(b.c + 0.5 * hs * k1.c, b.v + 0.5 * hs * k1.v, s0 + 0.5 * hs * k1.s);
     const D k3 = f(b.c + 0.5 * hs * k2.c, b.v + 0.5 * hs * k2.v, s0 + 0.5 * hs * k2.s);
@@ -634,7 +707,7 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
   const double r = (hold - f0.g_t.dot(vh)) / (1.0 + e_.k);
   // As for the slip: the path hooks down the slope ever tighter as the ball stops.
   const double left = r > 0.0 ? speed / r : h;
-  const double hs = straight || left <= kLastPiece ? h : std::min(h, 0.5 * left);
+  const double hs = straight || r <= 0.0 || left <= kLastPiece ? h : std::min(h, 0.5 * left);
   if (r > 0.0 && speed <= r * hs) {
     o.step = speed / r;
     const Vector3d a = (f0.g_t - hold * vh) / (1.0 + e_.k);
@@ -645,10 +718,28 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
   }
   const double rho = surface().rolling_resistance;
   auto acc = [&](const Vector3d& c, const Vector3d& v) {
-    const Frame fr = plane_ ? f0 : FrameAt(c);
-    return Vector3d((fr.g_t - rho * fr.g_n * Unit(v, vh)) / (1.0 + e_.k));
+    if (plane_) return Vector3d((f0.g_t - rho * f0.g_n * Unit(v, vh)) / (1.0 + e_.k));
+    const Frame fr = FrameAt(c);
+    const double bend = fr.Bend(v);
+    const double push = std::max(fr.g_n + bend, 0.0);
+    const Vector3d vt = v - v.dot(fr.n) * fr.n;
+    return Vector3d((fr.g_t - rho * push * Unit(vt, vh)) / (1.0 + e_.k) + bend * fr.n);
   };
   o.step = hs;
+  if (dp45_) {
+    using V6 = Eigen::Matrix<double, 6, 1>;
+    auto g = [&](double, const V6& y) {
+      V6 out;
+      out << y.segment<3>(3), acc(y.segment<3>(0), y.segment<3>(3));
+      return out;
+    };
+    V6 y0;
+    y0 << b.c, b.v;
+    const V6 y1 = Dp45(g, y0, hs, &o.error);
+    b.c = y1.segment<3>(0);
+    b.v = y1.segment<3>(3);
+    return o;
+  }
   const Vector3d c0 = b.c, v0 = b.v;
   const Vector3d k1 = acc(c0, v0);
   const Vector3d v2 = v0 + 0.5 * hs * k1;
@@ -687,13 +778,43 @@ absl::StatusOr<Run::Next> Run::OnGround() {
     if (absl::Status st = Poll(); !st.ok()) return st;
     const Ball from = b_;
     const double t0 = t_;
-    StepOut o = Advance(from, s, rolling, h);
-    // Onto another zone (or off the map): the step is cut where the centre crosses.
+    StepOut o = Advance(from, s, rolling, dp45_ ? std::min(h, h_adapt_) : h);
+    if (dp45_) {
+      // Rejected while the error is over the tolerance; the next step from the last error.
+      bool rejected = false;
+      while (o.error > 1.0 && o.step > kMinAdaptiveStep) {
+        rejected = true;
+        ++result_.rejected_steps;
+        o = Advance(from, s, rolling, o.step * ode::Dp45StepFactor(o.error, true));
+      }
+      if (o.error > 0.0 && !o.transition) {
+        h_adapt_ = std::clamp(o.step * ode::Dp45StepFactor(o.error, rejected), kMinAdaptiveStep,
+                              options_.dt_s);
+      }
+    }
+    // Onto another zone (or off the map): the step is cut where the centre crosses. The zone
+    // is probed along the step's interpolant every kZoneProbe of travel, so that a graze over
+    // another surface's edge inside a long step is not passed over.
     int zone = zone_id_;
     if (!plane_) {
       zone = ground_.ZoneAt(o.b.c.x(), o.b.c.y());
+      double reach = o.step;  // the zone changes by here
+      const int probes = static_cast<int>(
+          std::min(1e4, std::ceil((o.b.c - from.c).norm() / kZoneProbe)));
+      for (int k = 1; k < probes; ++k) {
+        const double f = static_cast<double>(k) / probes;
+        const Vector3d p = Hermite(from.c, from.v, o.b.c, o.b.v, o.step, f).p;
+        if (ground_.ZoneAt(p.x(), p.y()) != zone_id_) {
+          const StepOut m = Advance(from, s, rolling, f * o.step);
+          if (ground_.ZoneAt(m.b.c.x(), m.b.c.y()) != zone_id_) {
+            reach = f * o.step;
+            zone = -2;  // (any other than zone_id_: recomputed after the cut)
+          }
+          break;
+        }
+      }
       if (zone != zone_id_) {
-        double lo = 0.0, hi = o.step;
+        double lo = 0.0, hi = reach;
         for (int i = 0; i < 64 && hi - lo > 1e-9; ++i) {
           const double mid = 0.5 * (lo + hi);
           const StepOut m = Advance(from, s, rolling, mid);
@@ -710,14 +831,30 @@ absl::StatusOr<Run::Next> Run::OnGround() {
     ++result_.steps;
     // Keep the ball on the ground: it takes off where the ground falls away faster than
     // gravity pulls it back over the step, and meets rising ground in an impact.
-    const Frame f1 = FrameAt(b_.c);
+    Frame f1 = FrameAt(b_.c);
     Next leave = Next::kGround;
     if (!plane_ && zone != Ground::kOffMap) {
-      const double vn = b_.v.dot(f1.n);
-      if (vn > f1.g_n * o.step) {
+      if (f1.Normal(b_.v) < 0.0) {
+        // The ground falls away faster than gravity can hold the ball to it: it takes off
+        // where N crosses zero (bisection on the step's length, to 1 ns).
+        double lo = 0.0, hi = o.step;
+        for (int i = 0; i < 64 && hi - lo > 1e-9; ++i) {
+          const double mid = 0.5 * (lo + hi);
+          const StepOut m = Advance(from, s, rolling, mid);
+          (FrameAt(m.b.c).Normal(m.b.v) >= 0.0 ? lo : hi) = mid;
+        }
+        if (hi < o.step) {
+          o = Advance(from, s, rolling, hi);
+          b_.c = o.b.c;
+          b_.v = o.b.v;
+          s = o.s;
+          t_ = t0 + o.step;
+          f1 = FrameAt(b_.c);
+          zone = ground_.ZoneAt(b_.c.x(), b_.c.y());
+        }
         leave = Next::kHop;
-      } else if (vn < -options_.settle_speed_mps) {
-        leave = Next::kImpact;
+      } else if (b_.v.dot(f1.n) < -options_.settle_speed_mps) {
+        leave = Next::kImpact;  // rising into the ball faster than the step followed
       }
     }
     if (plane_) {
@@ -819,6 +956,14 @@ double GroundPlane::HeightAt(double x, double y) const {
   return z == 0.0 ? 0.0 : z;  // never -0
 }
 
+GroundOptions CourseGroundOptions() {
+  GroundOptions o;
+  o.integrator = ode::Integrator::kDp45;
+  o.tolerance_m = 1e-8;
+  o.dt_s = 0.05;
+  return o;
+}
+
 GroundStart LandingFromFlight(const FlightResult& flight) {
   return GroundStart{.kind = GroundStartKind::kLanding,
                      .position_m = flight.landing_position_m,
@@ -878,13 +1023,24 @@ absl::Status ValidateCommon(const BallSpec& ball, const Hole& hole, bool hole_po
   if (absl::Status s = ValidateBallSpec(ball); !s.ok()) return s;
   if (absl::Status s = CheckFieldsInRange({
           {"gravity_mps2", options.gravity_mps2, 0, true, 100},
-          {"dt_s", options.dt_s, 1e-6, false, 0.01},
+          {"dt_s", options.dt_s, 1e-6, false, options.integrator == ode::Integrator::kDp45 ? 0.1 : 0.01},
           {"max_time_s", options.max_time_s, 0, true, 3600},
           {"settle_speed_mps", options.settle_speed_mps, 0.001, false, 1},
           {"start.time_s", start.time_s, -1e6, false, 1e6},
       });
       !s.ok()) {
     return s;
+  }
+  if (options.integrator == ode::Integrator::kDp45) {
+    if (absl::Status s = CheckFiniteInRange("tolerance_m", options.tolerance_m, 0, true, 0.1, false);
+        !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat(s.message(), " (dp45 needs a tolerance)"));
+    }
+  } else if (options.integrator != ode::Integrator::kRk4) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "integrator: %s; the ground phase takes rk4 or dp45", ode::IntegratorName(options.integrator)));
+  } else if (options.tolerance_m != 0.0) {
+    return absl::InvalidArgumentError("tolerance_m: rk4 takes a step (dt_s), not a tolerance");
   }
   // Samples: none, or at most kMaxSamples over max_time_s.
   if (options.sample_interval_s != 0.0) {

@@ -69,6 +69,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     o.sample_interval_s = RangeValue(in, 0, 1);
     o.max_time_s = RangeValue(in, 0, 600);
   }
+  if (in.ConsumeIntegralInRange(0, 3) == 0) {  // dp45, its tolerance and largest step
+    o.integrator = sportsim::ode::Integrator::kDp45;
+    o.tolerance_m = RangeValue(in, 1e-10, 0.1);
+    o.dt_s = RangeValue(in, 1e-4, 0.1);
+  }
   g::GroundStart start;
   const double x = RangeValue(in, -30, 30), y = RangeValue(in, -30, 30);
   switch (in.ConsumeIntegralInRange(0, 2)) {

@@ -108,7 +108,8 @@ TEST(CourseGroundTest, RandomShotsOnTheBuiltInCourseEndOnTheTerrain) {
       start.spin_radps = Eigen::Vector3d(-std::sin(heading * kDeg), std::cos(heading * kDeg), 0) *
                          (50 + 700 * u(rng));
     }
-    GroundOptions o;
+    // Half with RK4 at 5 ms, half with the courses' default (dp45).
+    GroundOptions o = i % 4 < 2 ? GroundOptions{} : CourseGroundOptions();
     o.sample_interval_s = 0.01;
     auto res = SimulateGroundOnCourse(BallSpec{}, c, hole, Hole{}, start, o);
     ASSERT_TRUE(res.ok()) << i << ": " << res.status();
@@ -234,6 +235,55 @@ TEST(CourseGroundTest, RefusesStartsOutOfPlay) {
       GroundStart{.kind = GroundStartKind::kLanding, .velocity_mps = Eigen::Vector3d(1, 0, 1)},
       NoSamples());
   EXPECT_THAT(std::string(up.status().message()), ::testing::HasSubstr("into the ground"));
+}
+
+// Both integrators converge on the terrain to a reference (RK4 at 50 us): putts across the
+// two-tier green and landings on the first hole's slopes. The courses' default (dp45 at
+// 1e-8 m) rests within 1 mm, RK4's error falls with its step and dp45's with its tolerance.
+TEST(CourseGroundTest, BothIntegratorsConvergeOnTheTerrain) {
+  const Course& c = Links();
+  std::vector<GroundStart> starts;
+  const Eigen::Vector2d pin2 = *c.holes[1].pin_m;
+  for (int i = 0; i < 6; ++i) {  // up and across the tier toward the pin
+    starts.push_back(PuttStart(pin2.x() - 4 + 1.5 * i, pin2.y() - 14, 3.2 + 0.1 * i,
+                               80 + 4 * i));
+  }
+  for (int i = 0; i < 6; ++i) {  // onto the first hole's fairway and green
+    GroundStart l;
+    l.kind = GroundStartKind::kLanding;
+    l.position_m = Eigen::Vector3d(220 + 25 * i, -10 + 4 * i, 0);
+    l.velocity_mps = Eigen::Vector3d(18, 0.5 * i, -14);
+    l.spin_radps = Eigen::Vector3d(0, 300 + 40 * i, 0);
+    starts.push_back(l);
+  }
+  auto rest = [&](const GroundStart& start, ode::Integrator integrator, double value) {
+    GroundOptions o = NoSamples();
+    o.integrator = integrator;
+    if (integrator == ode::Integrator::kDp45) {
+      o.tolerance_m = value;
+      o.dt_s = 0.05;
+    } else {
+      o.dt_s = value;
+    }
+    auto r = SimulateGroundOnCourse(BallSpec{}, c, start.kind == GroundStartKind::kPutt ? 2 : 1,
+                                    Hole{}, start, o);
+    EXPECT_TRUE(r.ok()) << r.status();
+    return r.ok() ? r->rest_m : Eigen::Vector3d::Zero();
+  };
+  double rk4_coarse = 0, rk4_fine = 0, dp_loose = 0, dp_tight = 0;
+  for (const GroundStart& start : starts) {
+    const Eigen::Vector3d ref = rest(start, ode::Integrator::kRk4, 5e-5);
+    // The courses' default (dp45 at 1e-8 m) within 1 mm; RK4 at 5 ms within a centimetre.
+    EXPECT_LT((rest(start, ode::Integrator::kDp45, 1e-8) - ref).norm(), 1e-3);
+    EXPECT_LT((rest(start, ode::Integrator::kRk4, 5e-3) - ref).norm(), 1e-2);
+    rk4_coarse = std::max(rk4_coarse, (rest(start, ode::Integrator::kRk4, 1e-2) - ref).norm());
+    rk4_fine = std::max(rk4_fine, (rest(start, ode::Integrator::kRk4, 1e-3) - ref).norm());
+    dp_loose = std::max(dp_loose, (rest(start, ode::Integrator::kDp45, 1e-4) - ref).norm());
+    dp_tight = std::max(dp_tight, (rest(start, ode::Integrator::kDp45, 1e-9) - ref).norm());
+  }
+  EXPECT_LT(rk4_fine, rk4_coarse);
+  EXPECT_LT(dp_tight, dp_loose);
+  EXPECT_LT(dp_tight, 1e-4);
 }
 
 // The bounding-box index answers as the plain scan does.

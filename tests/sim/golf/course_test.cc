@@ -118,9 +118,10 @@ TEST(CourseTest, SurfaceOverridesReplaceTheBuiltInConstants) {
   EXPECT_NEAR(c->Constants(c->SurfaceAt(35, 10)).stimp_ft(), 13.0, 1e-9);
 }
 
-// A plane sampled on the grid is reproduced exactly between the samples, height and normal,
-// as the ground phase's plane gives them.
-TEST(CourseTest, BilinearTerrainReproducesAPlane) {
+// A plane sampled on the grid is reproduced between the samples, height and normal, as the
+// ground phase's plane gives them, and its curvature is zero (Catmull-Rom patches with the
+// samples extended linearly beyond the edge reproduce linear functions).
+TEST(CourseTest, TheTerrainReproducesAPlane) {
   auto c = PracticeCourse(10.0, 3.0, 30.0);
   ASSERT_TRUE(c.ok()) << c.status();
   const GroundPlane plane{.slope_pct = 3.0, .slope_toward_deg = 30.0};
@@ -130,10 +131,16 @@ TEST(CourseTest, BilinearTerrainReproducesAPlane) {
     const double x = u(rng), y = u(rng);
     EXPECT_NEAR(c->terrain.HeightAt(x, y), plane.HeightAt(x, y), 1e-12);
     EXPECT_LT((c->terrain.NormalAt(x, y) - plane.Normal()).norm(), 1e-12);
+    Eigen::Matrix2d hessian;
+    c->terrain.Sample(x, y, nullptr, nullptr, &hessian);
+    EXPECT_LT(hessian.norm(), 1e-12);
   }
+  // Beyond the edge: the edge's height and normal.
+  EXPECT_NEAR(c->terrain.HeightAt(-40, 0), plane.HeightAt(-30, 0), 1e-12);
 }
 
-// On a curved grid the height interpolates the samples and the normal is the gradient's.
+// On a curved grid the height interpolates the samples, the normal is the gradient's, the
+// Hessian the gradient's derivative, and height and slope are continuous across cell edges.
 TEST(CourseTest, TerrainNormalIsTheHeightsGradient) {
   const auto links = BuiltinCourse("sportsim_links");
   ASSERT_TRUE(links.ok());
@@ -153,7 +160,22 @@ TEST(CourseTest, TerrainNormalIsTheHeightsGradient) {
     const double gy = (h.HeightAt(x, y + e) - h.HeightAt(x, y - e)) / (2 * e);
     const Eigen::Vector3d n = Eigen::Vector3d(-gx, -gy, 1).normalized();
     EXPECT_LT((h.NormalAt(x, y) - n).norm(), 1e-7) << x << "," << y;
+    Eigen::Vector2d g0, g_east, g_north;
+    Eigen::Matrix2d hess;
+    h.Sample(x, y, nullptr, &g0, &hess);
+    h.Sample(x + e, y, nullptr, &g_east, nullptr);
+    h.Sample(x, y + e, nullptr, &g_north, nullptr);
+    EXPECT_LT(((g_east - g0) / e - hess.col(0)).norm(), 1e-4 * (1 + hess.norm())) << x;
+    EXPECT_LT(((g_north - g0) / e - hess.col(1)).norm(), 1e-4 * (1 + hess.norm())) << y;
   }
+  // Across a cell edge (x = x0 + 7 s) height and slope meet from both sides.
+  const double xe = h.x0_m + 7 * h.spacing_m, ye = h.y0_m + 11.3 * h.spacing_m;
+  Eigen::Vector2d left, right;
+  double zl = 0, zr = 0;
+  h.Sample(xe - 1e-9, ye, &zl, &left, nullptr);
+  h.Sample(xe + 1e-9, ye, &zr, &right, nullptr);
+  EXPECT_NEAR(zl, zr, 1e-8);
+  EXPECT_LT((left - right).norm(), 1e-7);
 }
 
 // Rules 18.2a, 17.1a, 12.1, 13.1a: out of bounds only wholly, the specified areas on a touch.

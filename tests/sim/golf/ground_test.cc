@@ -473,3 +473,62 @@ TEST(GroundTest, Deterministic) {
 
 }  // namespace
 }  // namespace sportsim::golf
+
+namespace sportsim::golf {
+namespace {
+
+// The two integrators against a converged reference (RK4 at 20 us) on putts across slopes:
+// RK4's rest error falls with the step, dp45's with its tolerance, and the default (RK4 at
+// 5 ms) rests within 1 mm; dp45 refuses a missing tolerance and RK4 a tolerance.
+TEST(GroundIntegratorsTest, BothConvergeToTheReferenceOnASlope) {
+  const Surface green = *GreenOfStimp(11);
+  const GroundPlane plane{.slope_pct = 4, .slope_toward_deg = -70};
+  using ode::Integrator;
+  auto rest = [&](Integrator integrator, double value, double x, double heading) {
+    GroundOptions o;
+    o.sample_interval_s = 0;
+    o.hole = false;
+    o.integrator = integrator;
+    if (integrator == Integrator::kDp45) {
+      o.tolerance_m = value;
+      o.dt_s = 0.05;
+    } else {
+      o.dt_s = value;
+    }
+    auto r = SimulateGround(BallSpec{}, green, plane, Hole{}, PuttStart(x, 0, 3.0, heading), o);
+    EXPECT_TRUE(r.ok()) << r.status();
+    return r.ok() ? r->rest_m : Eigen::Vector3d::Zero();
+  };
+  double rk4_err[2] = {0, 0}, dp_err[2] = {0, 0};
+  for (int i = 0; i < 8; ++i) {
+    const double x = -4 + i, heading = 10 + 20 * i;
+    const Eigen::Vector3d ref = rest(Integrator::kRk4, 2e-5, x, heading);
+    const double e5 = (rest(Integrator::kRk4, 5e-3, x, heading) - ref).norm();
+    EXPECT_LT(e5, 1e-3);
+    rk4_err[0] = std::max(rk4_err[0], (rest(Integrator::kRk4, 0.01, x, heading) - ref).norm());
+    rk4_err[1] = std::max(rk4_err[1], (rest(Integrator::kRk4, 0.0025, x, heading) - ref).norm());
+    dp_err[0] = std::max(dp_err[0], (rest(Integrator::kDp45, 1e-5, x, heading) - ref).norm());
+    dp_err[1] = std::max(dp_err[1], (rest(Integrator::kDp45, 1e-9, x, heading) - ref).norm());
+  }
+  EXPECT_LT(rk4_err[1], rk4_err[0]);
+  EXPECT_LT(dp_err[1], dp_err[0]);
+  EXPECT_LT(dp_err[1], 1e-6);
+  GroundOptions bad;
+  bad.integrator = Integrator::kDp45;
+  EXPECT_THAT(std::string(ValidateGround(BallSpec{}, green, plane, Hole{}, PuttStart(1, 0, 1, 0), bad)
+                              .message()),
+              ::testing::HasSubstr("tolerance_m"));
+  bad.integrator = Integrator::kRk4;
+  bad.tolerance_m = 1e-6;
+  EXPECT_THAT(std::string(ValidateGround(BallSpec{}, green, plane, Hole{}, PuttStart(1, 0, 1, 0), bad)
+                              .message()),
+              ::testing::HasSubstr("tolerance_m"));
+  bad.integrator = Integrator::kEuler;
+  bad.tolerance_m = 0;
+  EXPECT_THAT(std::string(ValidateGround(BallSpec{}, green, plane, Hole{}, PuttStart(1, 0, 1, 0), bad)
+                              .message()),
+              ::testing::HasSubstr("integrator"));
+}
+
+}  // namespace
+}  // namespace sportsim::golf
