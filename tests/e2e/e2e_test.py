@@ -55,6 +55,8 @@ class CliAgainstServer(unittest.TestCase):
                          ["book", "euler", "semi_implicit_euler", "rk4", "dp45"])
         for key in ("engines", "integrators", "table_presets", "racks"):
             self.assertIn(key, caps)  # present even while empty
+        self.assertEqual(caps["golf_courses"][0], "sportsim_links")
+        self.assertIn("bunker", caps["golf_surfaces"])
 
     def test_health(self):
         r = cli(self.server.address, "health")
