@@ -1,5 +1,6 @@
-// The golf ball's ground phase on a plane of any tilt: from a landing (or a putt, or a ball
-// already rolling) through bounces, the skid, the roll, the hole, to rest.
+// The golf ball's ground phase on a plane of any tilt (SimulateGround) or on a course's terrain
+// and surfaces (SimulateGroundOnCourse, below): from a landing (or a putt, or a ball already
+// rolling) through bounces, the skid, the roll, the hole, to rest.
 //
 // Frame: x, y horizontal, z up (metres); the plane passes through the origin and falls toward
 // the heading `slope_toward_deg` (counter-clockwise from +x) at `slope_pct` percent:
@@ -53,7 +54,8 @@
 //
 // Integration: without a pull along the plane (flat, or the slope switched off) the skid and
 // the roll are each at constant acceleration in a fixed direction and are solved exactly, one
-// piece each. Otherwise they are integrated by classical RK4 at the fixed step dt_s; near the
+// piece each. Otherwise they are integrated by classical RK4 at the fixed step dt_s (or by
+// Dormand-Prince 5(4) under a tolerance: GroundOptions::integrator); near the
 // slip's or the roll's end, where the direction turns ever faster, the steps halve with the
 // time left until a last piece of 0.1 ms, which is cut at the zero (the slip's end exactly
 // through the invariant v - k/(1+k) s, the roll's at constant acceleration): the transitions
