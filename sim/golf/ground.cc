@@ -740,16 +740,26 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
     b.v = y1.segment<3>(3);
     return o;
   }
-  const Vector3d c0 = b.c, v0 = b.v;
-  const Vector3d k1 = acc(c0, v0);
-  const Vector3d v2 = v0 + 0.5 * hs * k1;
-  const Vector3d k2 = acc(c0 + 0.5 * hs * v0, v2);
-  const Vector3d v3 = v0 + 0.5 * hs * k2;
-  const Vector3d k3 = acc(c0 + 0.5 * hs * v2, v3);
-  const Vector3d v4 = v0 + hs * k3;
-  const Vector3d k4 = acc(c0 + hs * v3, v4);
-  b.c += (hs / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
-  b.v += (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  // RK4 on (c, v); on the plane with the plane's own (small, inlined) acceleration.
+  auto rk4 = [&](auto&& a) {
+    const Vector3d c0 = b.c, v0 = b.v;
+    const Vector3d k1 = a(c0, v0);
+    const Vector3d v2 = v0 + 0.5 * hs * k1;
+    const Vector3d k2 = a(c0 + 0.5 * hs * v0, v2);
+    const Vector3d v3 = v0 + 0.5 * hs * k2;
+    const Vector3d k3 = a(c0 + 0.5 * hs * v2, v3);
+    const Vector3d v4 = v0 + hs * k3;
+    const Vector3d k4 = a(c0 + hs * v3, v4);
+    b.c += (hs / 6.0) * (v0 + 2.0 * v2 + 2.0 * v3 + v4);
+    b.v += (hs / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  };
+  if (plane_) {
+    const Vector3d gt = f0.g_t / (1.0 + e_.k);
+    const double decel = rho * f0.g_n / (1.0 + e_.k);
+    rk4([&](const Vector3d&, const Vector3d& v) { return Vector3d(gt - decel * Unit(v, vh)); });
+  } else {
+    rk4(acc);
+  }
   return o;
 }
 
