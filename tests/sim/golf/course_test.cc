@@ -1,6 +1,7 @@
 #include "sim/golf/course.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -192,6 +193,8 @@ TEST(CourseTest, TheLieFollowsTheRulesAtEdges) {
   // The water's edge at y = 4: a ball whose centre is 2 cm beyond it touches it.
   EXPECT_EQ(c->SurfaceAt(12, 4.02).terrain, Terrain::kRough);
   EXPECT_EQ(c->LieAt(12, 4.02, r), Terrain::kWaterHazard);
+  EXPECT_NEAR(c->DistanceToEdge(12, 4.02, Terrain::kWaterHazard), 0.02, 1e-12);
+  EXPECT_EQ(c->DistanceToEdge(12, 4.02, Terrain::kCartpath), std::numeric_limits<double>::infinity());
   EXPECT_EQ(c->LieAt(12, 4.03, r), Terrain::kRough);
   // A bunker's edge (x = 20), from the fairway; the green's (x = 30).
   EXPECT_EQ(c->LieAt(19.99, 13, r), Terrain::kBunker);
