@@ -22,12 +22,6 @@ constexpr double kMaxFrom = 1000.0;       // m
 // Practice's default start: a 10 m putt toward the hole at the origin.
 constexpr double kPracticeFromX = -10.0;
 
-// The course's rotation of a flight-frame vector (x along the aim, y left) by the aim heading.
-Vector3d ToCourse(const Vector3d& v, double aim_deg) {
-  const double c = std::cos(aim_deg * kDeg), s = std::sin(aim_deg * kDeg);
-  return Vector3d(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
-}
-
 absl::Status Field(std::string_view name, double value, double lo, double hi) {
   return CheckFiniteInRange(name, value, lo, false, hi, false);
 }
@@ -230,6 +224,30 @@ absl::StatusOr<GolfShotJob> GolfShotJobFromProto(const v1::SimulateGolfShotReque
 
 namespace {
 
+// The ground's own field names are the sim's; say which request fields they come from.
+absl::Status FromTheGround(const absl::Status& s) {
+  if (s.code() != absl::StatusCode::kInvalidArgument) return s;
+  return absl::InvalidArgumentError(
+      absl::StrFormat("%s (the shot as it reaches the ground)", s.message()));
+}
+
+// The ground phase into the response: its path samples and events, the totals from `from`
+// along the aim (lateral + right: the aim turned a quarter clockwise), the rest.
+v1::GolfRest* GroundToProto(const golf::GroundResult& g, const Vector3d& from, double aim_deg,
+                            const std::string& surface, v1::SimulateGolfShotResponse* out) {
+  for (const golf::GroundSample& s : g.samples) AddPoint(s.t_s, s.position_m, out);
+  for (const golf::GroundEvent& e : g.events) GroundEventToProto(e, out->add_events());
+  const Vector3d d = g.rest_m - from;
+  const double aim = aim_deg * kDeg;
+  out->set_total_m(std::hypot(d.x(), d.y()));
+  out->set_lateral_m(d.x() * std::sin(aim) - d.y() * std::cos(aim));
+  out->set_t_rest_s(g.t_rest_s);
+  out->set_bounces(static_cast<uint32_t>(g.bounces));
+  v1::GolfRest* rest = out->mutable_rest();
+  GroundRestToProto(g, surface, rest);
+  return rest;
+}
+
 // A shot on a course (PlayCourseShot) into the response.
 absl::Status RunCourseShot(const GolfShotJob& job, const std::function<bool()>& cancelled,
                            v1::SimulateGolfShotResponse* out) {
@@ -258,29 +276,15 @@ absl::Status RunCourseShot(const GolfShotJob& job, const std::function<bool()>& 
       break;
   }
   absl::StatusOr<golf::CourseShotResult> played = golf::PlayCourseShot(*job.course, shot);
-  if (!played.ok()) {
-    if (played.status().code() == absl::StatusCode::kInvalidArgument) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s (the shot as it reaches the ground)", played.status().message()));
-    }
-    return played.status();
-  }
-  const golf::CourseShotResult& p = *played;
-  for (const golf::GroundSample& s : p.path) AddPoint(s.t_s, s.position_m, out);
-  for (const golf::GroundEvent& e : p.ground.events) GroundEventToProto(e, out->add_events());
+  if (!played.ok()) return FromTheGround(played.status());
+  golf::CourseShotResult& p = *played;
   if (p.flight) {
     FlightResultToProto(*p.flight, 0.0, out->mutable_flight());
     out->mutable_flight()->clear_samples();
     out->set_carry_m(p.flight->carry_m);
   }
-  const Vector3d d = p.ground.rest_m - p.start_m;
-  const double aim = job.aim_deg * kDeg;
-  out->set_total_m(std::hypot(d.x(), d.y()));
-  out->set_lateral_m(d.x() * std::sin(aim) - d.y() * std::cos(aim));
-  out->set_t_rest_s(p.ground.t_rest_s);
-  out->set_bounces(static_cast<uint32_t>(p.ground.bounces));
-  v1::GolfRest* rest = out->mutable_rest();
-  GroundRestToProto(p.ground, p.ground.rest_surface, rest);
+  p.ground.samples = std::move(p.path);  // the whole path, air then ground
+  v1::GolfRest* rest = GroundToProto(p.ground, p.start_m, job.aim_deg, p.ground.rest_surface, out);
   rest->set_distance_to_pin_m(p.distance_to_pin_m);
   rest->set_lie(std::string(golf::TerrainTag(p.lie)));
   rest->set_out_of_bounds(p.ground.out_of_bounds);
@@ -308,12 +312,12 @@ absl::Status RunGolfShot(const GolfShotJob& job, const std::function<bool()>& ca
     // The path in the air, in the course frame (the flight lands at the start's height: the
     // ground phase takes its contact point on the plane under the landing point).
     for (const golf::FlightSample& s : f->samples) {
-      AddPoint(s.t_s, from + ToCourse(Vector3d(s.x_m, s.y_m, s.z_m), job.aim_deg), out);
+      AddPoint(s.t_s, from + golf::AimToCourse(Vector3d(s.x_m, s.y_m, s.z_m), job.aim_deg), out);
     }
     golf::FlightResult in_course = *f;
-    in_course.landing_position_m = from + ToCourse(f->landing_position_m, job.aim_deg);
-    in_course.landing_velocity_mps = ToCourse(f->landing_velocity_mps, job.aim_deg);
-    in_course.spin_axis = ToCourse(f->spin_axis, job.aim_deg);
+    in_course.landing_position_m = from + golf::AimToCourse(f->landing_position_m, job.aim_deg);
+    in_course.landing_velocity_mps = golf::AimToCourse(f->landing_velocity_mps, job.aim_deg);
+    in_course.spin_axis = golf::AimToCourse(f->spin_axis, job.aim_deg);
     start = golf::LandingFromFlight(in_course);
     FlightResultToProto(*f, 0.0, out->mutable_flight());
     out->mutable_flight()->clear_samples();
@@ -326,26 +330,9 @@ absl::Status RunGolfShot(const GolfShotJob& job, const std::function<bool()>& ca
   }
   absl::StatusOr<golf::GroundResult> g =
       golf::SimulateGround(golf::BallSpec{}, job.surface, job.plane, job.hole, start, ground);
-  if (!g.ok()) {
-    // The ground's own field names are the sim's; say which request fields they come from.
-    if (g.status().code() == absl::StatusCode::kInvalidArgument) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "%s (the shot as it reaches the ground)", g.status().message()));
-    }
-    return g.status();
-  }
-  for (const golf::GroundSample& s : g->samples) AddPoint(s.t_s, s.position_m, out);
-  for (const golf::GroundEvent& e : g->events) GroundEventToProto(e, out->add_events());
-  const Vector3d d = g->rest_m - from;
-  const double aim = job.aim_deg * kDeg;
+  if (!g.ok()) return FromTheGround(g.status());
   out->set_carry_m(carry);
-  out->set_total_m(std::hypot(d.x(), d.y()));
-  // + right of the aim line: the aim turned a quarter clockwise.
-  out->set_lateral_m(d.x() * std::sin(aim) - d.y() * std::cos(aim));
-  out->set_t_rest_s(g->t_rest_s);
-  out->set_bounces(static_cast<uint32_t>(g->bounces));
-  v1::GolfRest* rest = out->mutable_rest();
-  GroundRestToProto(*g, job.surface.name, rest);
+  v1::GolfRest* rest = GroundToProto(*g, from, job.aim_deg, job.surface.name, out);
   if (job.has_hole) {
     rest->set_distance_to_pin_m(
         g->holed ? 0.0 : std::hypot(g->rest_m.x() - job.hole.x_m, g->rest_m.y() - job.hole.y_m));

@@ -7,6 +7,7 @@
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "sim/core/check.h"
+#include "sim/core/ode/hermite.h"
 
 namespace sportsim::golf {
 
@@ -19,30 +20,23 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kFlightSample = 5e-3;     // the flight's samples for the landing search (s)
 constexpr double kMaxStrokeSpeed = 15.0;  // a putt or a roll (m/s)
 
-// A flight-frame vector (x along the aim, y left) in the course frame.
-Vector3d ToCourse(const Vector3d& v, double aim_deg) {
-  const double c = std::cos(aim_deg * kDeg), s = std::sin(aim_deg * kDeg);
-  return Vector3d(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
-}
-
 // A flight sample's position and velocity (flight frame).
 Vector3d P(const FlightSample& s) { return Vector3d(s.x_m, s.y_m, s.z_m); }
 Vector3d V(const FlightSample& s) { return Vector3d(s.vx_mps, s.vy_mps, s.vz_mps); }
 
 // The cubic Hermite interpolant between two samples at the fraction f: position, velocity.
 std::pair<Vector3d, Vector3d> Between(const FlightSample& a, const FlightSample& b, double f) {
-  const double h = b.t_s - a.t_s;
-  const double f2 = f * f, f3 = f2 * f;
-  const Vector3d p0 = P(a), p1 = P(b), m0 = h * V(a), m1 = h * V(b);
-  const Vector3d p = (2 * f3 - 3 * f2 + 1) * p0 + (f3 - 2 * f2 + f) * m0 +
-                     (-2 * f3 + 3 * f2) * p1 + (f3 - f2) * m1;
-  const Vector3d v = ((6 * f2 - 6 * f) * p0 + (3 * f2 - 4 * f + 1) * m0 +
-                      (-6 * f2 + 6 * f) * p1 + (3 * f2 - 2 * f) * m1) /
-                     h;
+  Vector3d p, v;
+  ode::CubicHermiteRate(P(a), V(a), P(b), V(b), b.t_s - a.t_s, f, &p, &v);
   return {p, v};
 }
 
 }  // namespace
+
+Vector3d AimToCourse(const Vector3d& v, double aim_deg) {
+  const double c = std::cos(aim_deg * kDeg), s = std::sin(aim_deg * kDeg);
+  return Vector3d(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
+}
 
 absl::StatusOr<CourseShotResult> PlayCourseShot(const Course& course, const CourseShot& shot) {
   const CourseHole* hole = course.Hole(shot.hole);
@@ -85,7 +79,7 @@ absl::StatusOr<CourseShotResult> PlayCourseShot(const Course& course, const Cour
         SimulateFlight(shot.ball, shot.launch, shot.air.value_or(course.air), wind, fo);
     if (!f.ok()) return f.status();
     const Vector3d base(shot.from_m.x(), shot.from_m.y(), low);
-    auto course_point = [&](const Vector3d& p) { return Vector3d(base + ToCourse(p, shot.aim_deg)); };
+    auto course_point = [&](const Vector3d& p) { return Vector3d(base + AimToCourse(p, shot.aim_deg)); };
     // Height above the ground (negative: below), or nullopt off the map.
     auto above = [&](const Vector3d& p) -> std::optional<double> {
       const Vector3d q = course_point(p);
@@ -148,8 +142,8 @@ absl::StatusOr<CourseShotResult> PlayCourseShot(const Course& course, const Cour
     out.landing_m = course_point(p);
     start.kind = GroundStartKind::kLanding;
     start.position_m = out.landing_m;
-    start.velocity_mps = ToCourse(v, shot.aim_deg);
-    start.spin_radps = spin_rpm * kRpmToRadPerS * ToCourse(f->spin_axis, shot.aim_deg);
+    start.velocity_mps = AimToCourse(v, shot.aim_deg);
+    start.spin_radps = spin_rpm * kRpmToRadPerS * AimToCourse(f->spin_axis, shot.aim_deg);
     start.time_s = t;
     if (off_map && !course.terrain.Covers(out.landing_m.x(), out.landing_m.y())) {
       // Left the map in the air: out of bounds where it left.

@@ -66,6 +66,10 @@ struct CourseShotResult {
   double distance_to_pin_m = 0.0;  ///< 0 when holed
 };
 
+/// A vector of a flight's frame (x along the aim, y left, z up) in the course frame, the aim a
+/// heading (deg, ccw from +x).
+Eigen::Vector3d AimToCourse(const Eigen::Vector3d& v, double aim_deg);
+
 /// Plays the shot. InvalidArgument names the bad field (hole, from_m, speed_mps, launch.*,
 /// and the flight's and the ground's own); OutOfRange and Cancelled from the simulations.
 absl::StatusOr<CourseShotResult> PlayCourseShot(const Course& course, const CourseShot& shot);

@@ -11,6 +11,7 @@
 #include "absl/strings/str_format.h"
 #include "sim/core/check.h"
 #include "sim/core/effects.h"
+#include "sim/core/ode/hermite.h"
 #include "sim/core/ode/integrator.h"
 #include "sim/core/ode/runge_kutta.h"
 
@@ -44,13 +45,9 @@ struct HermitePoint {
 };
 HermitePoint Hermite(const Vector3d& p0, const Vector3d& v0, const Vector3d& p1,
                      const Vector3d& v1, double h, double f) {
-  const double f2 = f * f, f3 = f2 * f;
-  const Vector3d m0 = h * v0, m1 = h * v1;
-  return {(2 * f3 - 3 * f2 + 1) * p0 + (f3 - 2 * f2 + f) * m0 + (-2 * f3 + 3 * f2) * p1 +
-              (f3 - f2) * m1,
-          ((6 * f2 - 6 * f) * p0 + (3 * f2 - 4 * f + 1) * m0 + (-6 * f2 + 6 * f) * p1 +
-           (3 * f2 - 2 * f) * m1) /
-              h};
+  HermitePoint out;
+  ode::CubicHermiteRate(p0, v0, p1, v1, h, f, &out.p, &out.v);
+  return out;
 }
 
 Vector3d PlanePoint(const GroundPlane& plane, double x, double y) {

@@ -32,6 +32,19 @@ Vec CubicHermite(const Vec& y0, const Vec& f0, const Vec& y1, const Vec& f1, dou
   return b.h00 * y0 + (b.h10 * h) * f0 + b.h01 * y1 + (b.h11 * h) * f1;
 }
 
+/// The cubic Hermite interpolant at s and its time derivative (the rate, d/dt = (1/h) d/ds).
+template <typename Vec>
+void CubicHermiteRate(const Vec& y0, const Vec& f0, const Vec& y1, const Vec& f1, double h,
+                      double s, Vec* y, Vec* rate) {
+  const double s2 = s * s, s3 = s2 * s;
+  const Vec m0 = h * f0, m1 = h * f1;
+  *y = (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * y1 +
+       (s3 - s2) * m1;
+  *rate = ((6 * s2 - 6 * s) * y0 + (3 * s2 - 4 * s + 1) * m0 + (-6 * s2 + 6 * s) * y1 +
+           (3 * s2 - 2 * s) * m1) /
+          h;
+}
+
 /// One scalar component of a cubic Hermite interpolant and its s-derivative.
 struct ScalarCubicHermite {
   double p0, m0, p1, m1;  ///< values and h * slopes at s = 0 and s = 1

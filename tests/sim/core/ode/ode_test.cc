@@ -233,5 +233,20 @@ TEST(EffectsTest, ZeroIsTheDefaultAndEnableBitsSwitchOn) {
   EXPECT_FALSE(ValidateEffectBits("effects", 1u << 5, 3u).ok());
 }
 
+// A cubic in time is reproduced exactly by the Hermite interpolant of its ends, and so is its
+// rate; the position agrees with CubicHermite.
+TEST(HermiteTest, CubicHermiteRateReproducesACubicAndItsRate) {
+  auto x = [](double t) { return Eigen::Vector2d(1 + 2 * t - 3 * t * t + 0.5 * t * t * t, -t * t * t); };
+  auto v = [](double t) { return Eigen::Vector2d(2 - 6 * t + 1.5 * t * t, -3 * t * t); };
+  const double t0 = 0.4, h = 0.7;
+  for (double s : {0.0, 0.25, 0.6, 1.0}) {
+    Eigen::Vector2d p, rate;
+    CubicHermiteRate(x(t0), v(t0), x(t0 + h), v(t0 + h), h, s, &p, &rate);
+    EXPECT_LT((p - x(t0 + s * h)).norm(), 1e-12) << s;
+    EXPECT_LT((rate - v(t0 + s * h)).norm(), 1e-12) << s;
+    EXPECT_LT((p - CubicHermite(x(t0), v(t0), x(t0 + h), v(t0 + h), h, s)).norm(), 1e-12);
+  }
+}
+
 }  // namespace
 }  // namespace sportsim::ode
