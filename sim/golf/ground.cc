@@ -642,7 +642,9 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
     // the direction by a bounded angle, until the last piece is short.
     const double left = r > 0.0 ? s0.norm() / r : h;
     const double hs = straight || r <= 0.0 || left <= kLastPiece ? h : std::min(h, 0.5 * left);
-    if (r > 0.0 && s0.norm() <= r * hs) {
+    // The last piece is taken whole however short the step offered (dp45's error control
+    // shrinks its steps as the direction turns: it would never reach the end).
+    if (r > 0.0 && (s0.norm() <= r * hs || left <= kLastPiece)) {
       // The slip ends inside this step. v - k/(1+k) s moves at the constant rate g_t/(1+k)
       // (the friction terms cancel), so the velocity at the end of the slip is exact whatever
       // path the slip's direction takes on the way to zero; the position takes the slip as
@@ -705,7 +707,7 @@ StepOut Run::Advance(const Ball& from, const Vector3d& s0, bool rolling, double 
   // As for the slip: the path hooks down the slope ever tighter as the ball stops.
   const double left = r > 0.0 ? speed / r : h;
   const double hs = straight || r <= 0.0 || left <= kLastPiece ? h : std::min(h, 0.5 * left);
-  if (r > 0.0 && speed <= r * hs) {
+  if (r > 0.0 && (speed <= r * hs || left <= kLastPiece)) {  // as the slip's last piece
     o.step = speed / r;
     const Vector3d a = (f0.g_t - hold * vh) / (1.0 + e_.k);
     b.c += from.v * o.step + 0.5 * o.step * o.step * a;

@@ -1,0 +1,859 @@
+#include "sim/golf/round.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "sim/golf/ground.h"
+
+namespace sportsim::golf {
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// --- seeded draws -----------------------------------------------------------------------------
+// Counter-based: draw n of a stream is a pure function of (seed, stream, n) (SplitMix64's
+// finaliser), so the state records only how many draws were made.
+
+uint64_t Mix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+enum Stream : uint64_t { kNoiseStream = 1, kDropStream = 2 };
+
+double Uniform(uint64_t seed, Stream stream, uint64_t n) {  // [0, 1)
+  return static_cast<double>(Mix(seed ^ Mix(stream * 0x100000001b3ull ^ Mix(n))) >> 11) * 0x1.0p-53;
+}
+
+double Normal(uint64_t seed, Stream stream, uint64_t n) {  // Box-Muller on draws 2n, 2n + 1
+  const double u1 = Uniform(seed, stream, 2 * n), u2 = Uniform(seed, stream, 2 * n + 1);
+  return std::sqrt(-2.0 * std::log1p(-u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+// --- places -----------------------------------------------------------------------------------
+
+Vector2d Pin(const Course& course, int hole) { return *course.Hole(hole)->pin_m; }
+
+double ToPin(const Course& course, int hole, const Vector3d& p) {
+  return (p.head<2>() - Pin(course, hole)).norm();
+}
+
+Vector3d OnGround(const Course& course, const Vector2d& p) {
+  return Vector3d(p.x(), p.y(), course.terrain.HeightAt(p.x(), p.y()));
+}
+
+const CourseTee& TeeOf(const CourseHole& hole, const std::string& name) {
+  for (const CourseTee& t : hole.tees) {
+    if (t.name == name) return t;
+  }
+  return hole.tees.front();
+}
+
+// A relief area (Rule 14.3): within `radius` of the reference point, not nearer the hole than
+// it, in bounds, and in the area `where` says.
+struct Relief {
+  enum class Where { kOutsidePenaltyArea, kInBunker, kOutsideBunker, kSameArea };
+  Vector2d reference = Vector2d::Zero();
+  double radius_m = kClubLengthM;
+  Where where = Where::kOutsidePenaltyArea;
+  CourseAreaKind same = CourseAreaKind::kGeneral;  // kSameArea
+};
+
+bool InRelief(const Course& course, int hole, const Relief& relief, const Vector2d& p, double r) {
+  if ((p - relief.reference).norm() > relief.radius_m * (1.0 + 1e-12)) return false;
+  const Vector2d pin = Pin(course, hole);
+  if ((p - pin).norm() < (relief.reference - pin).norm() * (1.0 - 1e-12)) return false;
+  if (!course.terrain.Covers(p.x(), p.y())) return false;
+  if (course.LieAt(p.x(), p.y(), r) == Terrain::kOutOfBounds) return false;
+  const CourseAreaKind a = AreaOfCourse(course, hole, p, r);
+  switch (relief.where) {
+    case Relief::Where::kOutsidePenaltyArea: return a != CourseAreaKind::kPenaltyArea;
+    case Relief::Where::kInBunker: return a == CourseAreaKind::kBunker;
+    case Relief::Where::kOutsideBunker:
+      return a != CourseAreaKind::kBunker && a != CourseAreaKind::kPenaltyArea;
+    case Relief::Where::kSameArea: return a == relief.same;
+  }
+  return false;
+}
+
+// The share of the relief circle's area a drop may come to rest in, on a 21 x 21 grid over its
+// square (at most about one half: "not nearer the hole" takes the other).
+double ReliefShare(const Course& course, int hole, const Relief& relief, double r) {
+  constexpr int kN = 21;
+  int inside = 0, valid = 0;
+  for (int i = 0; i < kN; ++i) {
+    for (int j = 0; j < kN; ++j) {
+      const Vector2d d(2.0 * i / (kN - 1) - 1.0, 2.0 * j / (kN - 1) - 1.0);
+      if (d.squaredNorm() > 1.0) continue;
+      ++inside;
+      valid += InRelief(course, hole, relief, relief.reference + relief.radius_m * d, r) ? 1 : 0;
+    }
+  }
+  return static_cast<double>(valid) / inside;
+}
+
+Relief::Where Constraint(const RoundDecision& d, bool outside_bunker) {
+  if (d.area == Terrain::kBunker && d.reason == "unplayable") {
+    return outside_bunker ? Relief::Where::kOutsideBunker : Relief::Where::kInBunker;
+  }
+  return Relief::Where::kOutsidePenaltyArea;
+}
+
+// Back on the line: the reference point `back_m` behind the decision's reference on the line
+// from the hole through it.
+Relief BackOnTheLine(const Course& course, int hole, const RoundDecision& d, double back_m,
+                     bool outside_bunker) {
+  const Vector2d pin = Pin(course, hole);
+  Vector2d u = d.reference_m.head<2>() - pin;
+  u = u.norm() > 1e-9 ? Vector2d(u.normalized()) : Vector2d(1.0, 0.0);
+  Relief relief;
+  relief.reference = d.reference_m.head<2>() + back_m * u;
+  relief.radius_m = kClubLengthM;
+  relief.where = Constraint(d, outside_bunker);
+  return relief;
+}
+
+// The reference point itself must be where the relief is taken to (not in the penalty area, in
+// or out of the bunker as chosen), in bounds, and the area around it must leave room to drop.
+bool UsableBackOnTheLine(const Course& course, int hole, const Relief& relief, double r) {
+  const Vector2d p = relief.reference;
+  if (!course.terrain.Covers(p.x(), p.y())) return false;
+  if (course.LieAt(p.x(), p.y(), r) == Terrain::kOutOfBounds) return false;
+  const CourseAreaKind a = AreaOfCourse(course, hole, p, r);
+  switch (relief.where) {
+    case Relief::Where::kInBunker:
+      if (a != CourseAreaKind::kBunker) return false;
+      break;
+    case Relief::Where::kOutsideBunker:
+      if (a == CourseAreaKind::kBunker || a == CourseAreaKind::kPenaltyArea) return false;
+      break;
+    default:
+      if (a == CourseAreaKind::kPenaltyArea) return false;
+  }
+  return ReliefShare(course, hole, relief, r) >= 0.25;
+}
+
+constexpr double kBackStepM = 0.5;
+constexpr double kBackMaxM = 500.0;
+
+// The nearest usable reference point behind: from 0 behind a penalty area's crossing (the
+// crossing itself lies on the edge), from a club-length behind an unplayable ball.
+std::optional<double> DefaultBack(const Course& course, int hole, const RoundDecision& d,
+                                  bool outside_bunker, double r) {
+  const double from = d.reason == "unplayable" && !outside_bunker && d.area != Terrain::kBunker
+                          ? kClubLengthM
+                          : 0.0;
+  for (double back = from; back <= kBackMaxM; back += kBackStepM) {
+    if (UsableBackOnTheLine(course, hole, BackOnTheLine(course, hole, d, back, outside_bunker), r)) {
+      return back;
+    }
+  }
+  return std::nullopt;
+}
+
+Relief Lateral(const RoundDecision& d) {
+  Relief relief;
+  relief.reference = d.reference_m.head<2>();
+  relief.radius_m = 2.0 * kClubLengthM;
+  relief.where = Constraint(d, false);
+  return relief;
+}
+
+std::vector<std::string> Choices(const Course& course, int hole, const RoundDecision& d,
+                                 double r) {
+  std::vector<std::string> out = {"stroke_and_distance"};
+  if (DefaultBack(course, hole, d, false, r)) out.push_back("back_on_the_line");
+  const bool lateral = d.reason == "unplayable" || d.area == Terrain::kLateralWaterHazard;
+  if (lateral && ReliefShare(course, hole, Lateral(d), r) > 0.0) out.push_back("lateral");
+  if (d.reason == "unplayable" && d.area == Terrain::kBunker &&
+      DefaultBack(course, hole, d, true, r)) {
+    out.push_back("back_on_the_line_outside_bunker");
+  }
+  return out;
+}
+
+std::string RuleOf(const RoundDecision& d, std::string_view choice) {
+  if (d.reason == "penalty_area") {
+    if (choice == "stroke_and_distance") return "17.1d(1)";
+    if (choice == "back_on_the_line") return "17.1d(2)";
+    return "17.1d(3)";
+  }
+  if (d.area == Terrain::kBunker) return choice == "back_on_the_line_outside_bunker" ? "19.3b" : "19.3a";
+  if (choice == "stroke_and_distance") return "19.2a";
+  if (choice == "back_on_the_line") return "19.2b";
+  return "19.2c";
+}
+
+// --- the referee's steps ----------------------------------------------------------------------
+
+class Referee {
+ public:
+  Referee(const Course& course, const RoundSettings& settings, const RoundState& state,
+          const std::function<bool()>& cancelled)
+      : course_(course), settings_(settings), cancelled_(cancelled) {
+    step_.state = state;
+  }
+
+  RoundState& state() { return step_.state; }
+  RoundPlayer& player(int seat) { return step_.state.players[seat]; }
+  RoundStep Take() { return std::move(step_); }
+
+  RoundEvent& Emit(RoundEventKind kind, int seat) {
+    RoundEvent& e = step_.events.emplace_back();
+    e.kind = kind;
+    e.seat = seat;
+    e.hole = state().hole;
+    e.strokes = seat >= 0 ? player(seat).strokes : 0;
+    return e;
+  }
+
+  void Penalty(int seat, int strokes, std::string reason, std::string rule) {
+    player(seat).strokes += strokes;
+    player(seat).penalties += strokes;
+    RoundEvent& e = Emit(RoundEventKind::kPenalty, seat);
+    e.penalty_strokes = strokes;
+    e.reason = std::move(reason);
+    e.rule = std::move(rule);
+    e.position_m = player(seat).ball.position_m;
+  }
+
+  void Put(int seat, const Vector3d& p) {
+    RoundBall& b = player(seat).ball;
+    b.position_m = p;
+    b.lie = course_.LieAt(p.x(), p.y(), r());
+    b.holed = false;
+  }
+
+  // Rule 14.3: dropped from knee height on a drawn point of the relief area; it must come to
+  // rest in it. Twice outside: placed where it first touched the ground on the second drop.
+  absl::Status Drop(int seat, const Relief& relief) {
+    const RoundSettings& s = settings_;
+    const int hole = state().hole;
+    Hole spec;
+    spec.flagstick_diameter_m = kFlagstickDiameter;
+    GroundOptions options = CourseGroundOptions();
+    options.sample_interval_s = 0.0;
+    options.cancelled = cancelled_;
+    Vector2d touched = relief.reference;
+    for (int attempt = 1; attempt <= 2; ++attempt) {
+      touched = DrawPoint(hole, relief);
+      GroundStart start;
+      start.kind = GroundStartKind::kLanding;
+      start.position_m = OnGround(course_, touched);
+      start.velocity_mps = Vector3d(0.0, 0.0, -std::sqrt(2.0 * options.gravity_mps2 * kKneeHeightM));
+      absl::StatusOr<GroundResult> g =
+          SimulateGroundOnCourse(s.ball, course_, hole, spec, start, options);
+      if (!g.ok()) return g.status();
+      const Vector3d rest = g->rest_m;
+      const bool in_area = !g->holed && !g->out_of_bounds && !g->penalty_area &&
+                           InRelief(course_, hole, relief, rest.head<2>(), r());
+      RoundEvent& e = Emit(RoundEventKind::kDrop, seat);
+      e.position_m = start.position_m;
+      e.rest_m = rest;
+      e.attempt = attempt;
+      e.in_area = in_area;
+      e.lie = std::string(TerrainTag(course_.LieAt(rest.x(), rest.y(), r())));
+      if (in_area) {
+        Put(seat, rest);
+        return absl::OkStatus();
+      }
+    }
+    Put(seat, OnGround(course_, touched));
+    RoundEvent& e = Emit(RoundEventKind::kPlaced, seat);
+    e.position_m = player(seat).ball.position_m;
+    e.lie = std::string(TerrainTag(player(seat).ball.lie));
+    e.rule = "14.3c(2)";
+    return absl::OkStatus();
+  }
+
+  // Stroke and distance (Rule 14.6): from the teeing area, teed again there; from the putting
+  // green, placed on the spot; elsewhere dropped within a club-length of it, not nearer the
+  // hole, in the same area of the course.
+  absl::Status ReturnToLastSpot(int seat) {
+    RoundBall& b = player(seat).ball;
+    const Vector3d spot = b.last_spot_m;
+    const CourseAreaKind area = AreaOfCourse(course_, state().hole, spot.head<2>(), r());
+    if (area == CourseAreaKind::kTeeing || area == CourseAreaKind::kGreen) {
+      Put(seat, spot);
+      RoundEvent& e = Emit(RoundEventKind::kPlaced, seat);
+      e.position_m = spot;
+      e.lie = std::string(TerrainTag(b.lie));
+      e.rule = "14.6";
+      return absl::OkStatus();
+    }
+    Relief relief;
+    relief.reference = spot.head<2>();
+    relief.radius_m = kClubLengthM;
+    relief.where = Relief::Where::kSameArea;
+    relief.same = area;
+    return Drop(seat, relief);
+  }
+
+  // After a ball has moved: the hole's end, the round's, and the marks on the green.
+  void Settle() {
+    RoundState& st = state();
+    const bool all_holed = std::all_of(st.players.begin(), st.players.end(),
+                                       [](const RoundPlayer& p) { return p.ball.holed; });
+    if (all_holed && !st.decision) {
+      const int index = st.hole - settings_.first_hole;
+      for (RoundPlayer& p : st.players) p.scores[index] = p.strokes;
+      Emit(RoundEventKind::kHoleEnd, -1);
+      if (st.hole == settings_.last_hole) {
+        st.over = true;
+        st.result = "finished";
+        int best = 0;
+        for (size_t i = 0; i < st.players.size(); ++i) {
+          const int t = st.players[i].Total();
+          if (i == 0 || t < best) {
+            best = t;
+            st.winners.clear();
+          }
+          if (t == best) st.winners.push_back(static_cast<int>(i));
+        }
+        Emit(RoundEventKind::kRoundEnd, -1);
+        return;
+      }
+      // Rule 6.4a(2): the lowest score on the hole has the honour on the next; ties keep the
+      // order they teed off in.
+      std::stable_sort(st.tee_order.begin(), st.tee_order.end(), [&](int a, int b) {
+        return st.players[a].scores[index] < st.players[b].scores[index];
+      });
+      ++st.hole;
+      for (size_t i = 0; i < st.players.size(); ++i) SendToTee(static_cast<int>(i));
+    }
+    const int next = ToPlay(course_, settings_, st);
+    for (size_t i = 0; i < st.players.size(); ++i) {
+      RoundBall& b = st.players[i].ball;
+      const bool on_green =
+          !b.holed && AreaOfCourse(course_, st.hole, b.position_m.head<2>(), r()) == CourseAreaKind::kGreen;
+      const bool mark = on_green && static_cast<int>(i) != next;
+      if (mark != b.marked) {
+        b.marked = mark;
+        Emit(mark ? RoundEventKind::kMarked : RoundEventKind::kReplaced, static_cast<int>(i))
+            .position_m = b.position_m;
+      }
+    }
+  }
+
+  void SendToTee(int seat) {
+    RoundPlayer& p = player(seat);
+    const CourseHole& hole = *course_.Hole(state().hole);
+    const Vector2d t = TeeOf(hole, p.tee).position_m;
+    p.strokes = 0;
+    p.penalties = 0;
+    p.ball = RoundBall{};
+    p.ball.position_m = OnGround(course_, t);
+    p.ball.lie = Terrain::kTee;
+    p.ball.last_spot_m = p.ball.position_m;
+    p.ball.last_lie = Terrain::kTee;
+  }
+
+  void OpenDecision(int seat, std::string reason, Terrain area, const Vector3d& reference) {
+    RoundDecision d;
+    d.seat = seat;
+    d.reason = std::move(reason);
+    d.area = area;
+    d.reference_m = reference;
+    d.choices = Choices(course_, state().hole, d, r());
+    RoundEvent& e = Emit(RoundEventKind::kDecision, seat);
+    e.reason = d.reason;
+    e.rule = d.reason == "penalty_area" ? "17.1d" : (area == Terrain::kBunker ? "19.3" : "19.2");
+    e.choices = d.choices;
+    e.position_m = reference;
+    state().decision = std::move(d);
+  }
+
+  double r() const { return settings_.ball.radius_m(); }
+
+ private:
+  // A point of the relief area: up to 256 uniform draws in its circle, the first inside; else
+  // the first point of the share grid that is (deterministic either way).
+  Vector2d DrawPoint(int hole, const Relief& relief) {
+    RoundState& st = state();
+    for (int k = 0; k < 256; ++k) {
+      const double a = 2.0 * std::numbers::pi * Uniform(settings_.seed, kDropStream, st.draws++);
+      const double rr = relief.radius_m * std::sqrt(Uniform(settings_.seed, kDropStream, st.draws++));
+      const Vector2d p = relief.reference + rr * Vector2d(std::cos(a), std::sin(a));
+      if (InRelief(course_, hole, relief, p, r())) return p;
+    }
+    constexpr int kN = 41;
+    for (int i = 0; i < kN; ++i) {
+      for (int j = 0; j < kN; ++j) {
+        const Vector2d d(2.0 * i / (kN - 1) - 1.0, 2.0 * j / (kN - 1) - 1.0);
+        const Vector2d p = relief.reference + relief.radius_m * d;
+        if (d.squaredNorm() <= 1.0 && InRelief(course_, hole, relief, p, r())) return p;
+      }
+    }
+    return relief.reference;
+  }
+
+  const Course& course_;
+  const RoundSettings& settings_;
+  const std::function<bool()>& cancelled_;
+  RoundStep step_;
+};
+
+absl::Status CheckTurn(const Course& course, const RoundSettings& settings,
+                       const RoundState& state, int seat) {
+  if (seat < 0 || seat >= static_cast<int>(state.players.size())) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("seat: %d is not a seat of the round (0 to %d)", seat, state.players.size() - 1));
+  }
+  if (state.over) return absl::FailedPreconditionError("the round is over");
+  if (state.decision) {
+    const RoundDecision& d = *state.decision;
+    const std::string rule = d.reason == "penalty_area" ? "Rule 17.1d" : "Rule 19";
+    if (d.seat == seat) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "a decision is pending: choose one of %s first (%s)", absl::StrJoin(d.choices, ", "), rule));
+    }
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "a decision is pending: %s (seat %d) chooses their relief first (%s)",
+        state.players[d.seat].name, d.seat, rule));
+  }
+  if (state.players[seat].ball.holed) {
+    return absl::FailedPreconditionError(
+        absl::StrFormat("%s's ball is holed on hole %d (Rule 13.2c)", state.players[seat].name, state.hole));
+  }
+  const std::vector<int> may = MayPlay(course, settings, state);
+  if (std::find(may.begin(), may.end(), seat) != may.end()) return absl::OkStatus();
+  const int next = ToPlay(course, settings, state);
+  const RoundPlayer& n = state.players[next];
+  const bool on_tee = n.strokes == 0;
+  return absl::FailedPreconditionError(absl::StrFormat(
+      "not your turn: %s (seat %d) plays next (Rule 6.4%s)", n.name, next,
+      on_tee ? "a: the honour on the tee" : "b: the ball farthest from the hole"));
+}
+
+absl::Status Beyond(std::string_view field, double value, double limit, std::string_view unit) {
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "%s: %g %s is beyond a human golfer (realistic profile: at most %g %s); the arcade profile "
+      "lifts the bound",
+      field, value, unit, limit, unit));
+}
+
+absl::Status CheckRealistic(const RoundStroke& s) {
+  const RoundLimits& l = kRoundLimits;
+  if (s.kind == RoundStroke::Kind::kPutt) {
+    if (s.speed_mps > l.max_putt_speed_mps) return Beyond("speed_mps", s.speed_mps, l.max_putt_speed_mps, "m/s");
+    return absl::OkStatus();
+  }
+  const LaunchConditions& c = s.launch;
+  if (c.ball_speed_mps > l.max_ball_speed_mps) {
+    return Beyond("launch.ball_speed_mps", c.ball_speed_mps, l.max_ball_speed_mps, "m/s");
+  }
+  if (c.launch_angle_deg > l.max_launch_angle_deg || c.launch_angle_deg < l.min_launch_angle_deg) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "launch.launch_angle_deg: %g deg is beyond a human golfer (realistic profile: %g to %g "
+        "deg); the arcade profile lifts the bound",
+        c.launch_angle_deg, l.min_launch_angle_deg, l.max_launch_angle_deg));
+  }
+  if (std::abs(c.launch_direction_deg) > l.max_launch_direction_deg) {
+    return Beyond("launch.launch_direction_deg", std::abs(c.launch_direction_deg),
+                  l.max_launch_direction_deg, "deg");
+  }
+  if (c.spin_rpm > l.max_spin_rpm) return Beyond("launch.spin_rpm", c.spin_rpm, l.max_spin_rpm, "rpm");
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+// --- names ------------------------------------------------------------------------------------
+
+std::string_view OrderOfPlayName(OrderOfPlay o) { return o == OrderOfPlay::kReady ? "ready" : "honour"; }
+
+std::string_view RealismName(Realism r) { return r == Realism::kArcade ? "arcade" : "realistic"; }
+
+absl::StatusOr<Realism> RealismFromName(std::string_view name) {
+  if (name == "realistic") return Realism::kRealistic;
+  if (name == "arcade") return Realism::kArcade;
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "realism: must be realistic or arcade; got \"%s\"", name.substr(0, 24)));
+}
+
+std::string_view CourseAreaName(CourseAreaKind a) {
+  switch (a) {
+    case CourseAreaKind::kGeneral: return "general";
+    case CourseAreaKind::kTeeing: return "teeing";
+    case CourseAreaKind::kPenaltyArea: return "penalty_area";
+    case CourseAreaKind::kBunker: return "bunker";
+    case CourseAreaKind::kGreen: return "green";
+  }
+  return "general";
+}
+
+std::string_view RoundEventName(RoundEventKind kind) {
+  switch (kind) {
+    case RoundEventKind::kStroke: return "stroke";
+    case RoundEventKind::kHoled: return "holed";
+    case RoundEventKind::kRest: return "rest";
+    case RoundEventKind::kPenalty: return "penalty";
+    case RoundEventKind::kDecision: return "decision";
+    case RoundEventKind::kChoice: return "choice";
+    case RoundEventKind::kDrop: return "drop";
+    case RoundEventKind::kPlaced: return "placed";
+    case RoundEventKind::kMarked: return "marked";
+    case RoundEventKind::kReplaced: return "replaced";
+    case RoundEventKind::kHoleEnd: return "hole_end";
+    case RoundEventKind::kRoundEnd: return "round_end";
+  }
+  return "stroke";
+}
+
+int RoundPlayer::Total() const {
+  int t = 0;
+  for (int s : scores) t += s;
+  return t;
+}
+
+// --- settings ---------------------------------------------------------------------------------
+
+absl::Status ValidateRoundSettings(const Course& course, const RoundSettings& s) {
+  const int n = static_cast<int>(course.holes.size());
+  if (s.first_hole < 1 || s.first_hole > n) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("holes: %d is not a hole of %s (1 to %d)", s.first_hole, course.name, n));
+  }
+  if (s.last_hole < s.first_hole || s.last_hole > n) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "holes: the last hole %d must be from %d to %d", s.last_hole, s.first_hole, n));
+  }
+  if (s.players.empty() || s.players.size() > 8) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("players: a round has 1 to 8 players; got %d", s.players.size()));
+  }
+  for (size_t i = 0; i < s.players.size(); ++i) {
+    const RoundPlayerSpec& p = s.players[i];
+    const bool printable = std::all_of(p.name.begin(), p.name.end(), [](char c) {
+      return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
+    });
+    if (p.name.empty() || p.name.size() > 40 || !printable) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "players[%d].name: must be 1 to 40 printable characters", i));
+    }
+    if (p.tee.empty()) continue;
+    bool found = false;
+    for (int h = s.first_hole; h <= s.last_hole && !found; ++h) {
+      for (const CourseTee& t : course.Hole(h)->tees) found = found || t.name == p.tee;
+    }
+    if (!found) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "players[%d].tee: \"%s\" is not a tee of holes %d-%d", i, p.tee.substr(0, 24),
+          s.first_hole, s.last_hole));
+    }
+  }
+  if (!std::isfinite(s.noise) || s.noise < 0.0 || s.noise > 5.0) {
+    return absl::InvalidArgumentError(absl::StrFormat("noise: must be in [0, 5]; got %g", s.noise));
+  }
+  return ValidateBallSpec(s.ball);
+}
+
+absl::Status SetRoundVariant(std::string_view name, std::string_view value, RoundSettings* settings) {
+  if (name == "order") {
+    if (value == "honour") {
+      settings->order = OrderOfPlay::kHonour;
+    } else if (value == "ready") {
+      settings->order = OrderOfPlay::kReady;
+    } else {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "rule order must be one of honour, ready; got \"%s\"", value.substr(0, 24)));
+    }
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(
+      absl::StrFormat("rule \"%s\" is not a rule of a round (order)", name.substr(0, 24)));
+}
+
+// --- areas ------------------------------------------------------------------------------------
+
+CourseAreaKind AreaOfCourse(const Course& course, int hole, const Vector2d& spot, double r) {
+  const Terrain lie = course.LieAt(spot.x(), spot.y(), r);
+  const Course::Spot under = course.SurfaceAt(spot.x(), spot.y());
+  const bool this_hole = under.hole == 0 || under.hole == hole || under.terrain != lie;
+  switch (lie) {
+    case Terrain::kWaterHazard:
+    case Terrain::kLateralWaterHazard: return CourseAreaKind::kPenaltyArea;
+    case Terrain::kBunker: return CourseAreaKind::kBunker;
+    case Terrain::kGreen: return this_hole ? CourseAreaKind::kGreen : CourseAreaKind::kGeneral;
+    case Terrain::kTee: return this_hole ? CourseAreaKind::kTeeing : CourseAreaKind::kGeneral;
+    default: return CourseAreaKind::kGeneral;
+  }
+}
+
+// --- the round --------------------------------------------------------------------------------
+
+absl::StatusOr<RoundState> StartRound(const Course& course, const RoundSettings& settings) {
+  if (absl::Status s = ValidateRoundSettings(course, settings); !s.ok()) return s;
+  RoundState st;
+  st.hole = settings.first_hole;
+  const int holes = settings.last_hole - settings.first_hole + 1;
+  for (size_t i = 0; i < settings.players.size(); ++i) {
+    RoundPlayer& p = st.players.emplace_back();
+    p.name = settings.players[i].name;
+    p.tee = settings.players[i].tee;
+    p.scores.assign(holes, 0);
+    st.tee_order.push_back(static_cast<int>(i));
+  }
+  static const std::function<bool()> kNever;
+  Referee ref(course, settings, st, kNever);
+  for (size_t i = 0; i < settings.players.size(); ++i) ref.SendToTee(static_cast<int>(i));
+  return ref.Take().state;
+}
+
+int ToPlay(const Course& course, const RoundSettings& settings, const RoundState& state) {
+  (void)settings;
+  if (state.over) return -1;
+  if (state.decision) return state.decision->seat;
+  for (int seat : state.tee_order) {
+    const RoundPlayer& p = state.players[seat];
+    if (!p.ball.holed && p.strokes == 0) return seat;
+  }
+  int best = -1;
+  double far = -1.0;
+  for (size_t i = 0; i < state.players.size(); ++i) {
+    const RoundPlayer& p = state.players[i];
+    if (p.ball.holed) continue;
+    const double d = ToPin(course, state.hole, p.ball.position_m);
+    if (d > far) {
+      far = d;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+std::vector<int> MayPlay(const Course& course, const RoundSettings& settings,
+                         const RoundState& state) {
+  if (state.over || state.decision) return {};
+  if (settings.order == OrderOfPlay::kHonour) {
+    const int next = ToPlay(course, settings, state);
+    return next >= 0 ? std::vector<int>{next} : std::vector<int>{};
+  }
+  std::vector<int> out;
+  for (size_t i = 0; i < state.players.size(); ++i) {
+    if (!state.players[i].ball.holed) out.push_back(static_cast<int>(i));
+  }
+  return out;
+}
+
+absl::Status CheckStroke(const Course& course, const RoundSettings& settings,
+                         const RoundState& state, int seat, const RoundStroke& stroke) {
+  if (absl::Status s = CheckTurn(course, settings, state, seat); !s.ok()) return s;
+  if (stroke.aim_deg && !(std::abs(*stroke.aim_deg) <= 1e4)) {
+    return absl::InvalidArgumentError("aim_deg: must be a finite heading (deg)");
+  }
+  if (stroke.kind == RoundStroke::Kind::kPutt) {
+    if (!(stroke.speed_mps > 0.0 && stroke.speed_mps <= 15.0)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("speed_mps: a putt's speed must be in (0, 15] m/s; got %g", stroke.speed_mps));
+    }
+  } else if (absl::Status s = ValidateLaunchConditions(stroke.launch); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("launch.", s.message()));
+  }
+  if (settings.realism == Realism::kRealistic) return CheckRealistic(stroke);
+  return absl::OkStatus();
+}
+
+absl::StatusOr<CourseShot> StrokeShot(const Course& course, const RoundSettings& settings,
+                                      const RoundState& state, int seat,
+                                      const RoundStroke& stroke) {
+  if (seat < 0 || seat >= static_cast<int>(state.players.size())) {
+    return absl::InvalidArgumentError(absl::StrFormat("seat: %d is not a seat of the round", seat));
+  }
+  const RoundBall& b = state.players[seat].ball;
+  CourseShot shot;
+  shot.hole = state.hole;
+  shot.from_m = b.position_m.head<2>();
+  const Vector2d to_pin = Pin(course, state.hole) - shot.from_m;
+  shot.aim_deg = stroke.aim_deg ? *stroke.aim_deg : std::atan2(to_pin.y(), to_pin.x()) / kDeg;
+  shot.ball = settings.ball;
+  shot.hole_spec.flagstick_diameter_m = stroke.flagstick_in ? kFlagstickDiameter : 0.0;
+  // The round's noise: the stroke's draws are its number's (8 per stroke).
+  const double k = settings.noise;
+  const uint64_t n0 = static_cast<uint64_t>(state.strokes) * 8;
+  auto normal = [&](int i) { return k > 0.0 ? Normal(settings.seed, kNoiseStream, n0 + i) : 0.0; };
+  if (stroke.kind == RoundStroke::Kind::kPutt) {
+    shot.kind = CourseShot::Kind::kPutt;
+    shot.speed_mps = std::clamp(stroke.speed_mps * (1.0 + 0.03 * k * normal(0)), 1e-3, 15.0);
+    shot.aim_deg += 0.5 * k * normal(1);
+  } else {
+    shot.kind = CourseShot::Kind::kLaunch;
+    LaunchConditions c = stroke.launch;
+    c.ball_speed_mps = std::clamp(c.ball_speed_mps * (1.0 + 0.015 * k * normal(0)), 0.1, 120.0);
+    c.launch_angle_deg = std::clamp(c.launch_angle_deg + 1.0 * k * normal(1), -90.0, 90.0);
+    c.launch_direction_deg = std::clamp(c.launch_direction_deg + 1.5 * k * normal(2), -90.0, 90.0);
+    c.spin_rpm = std::clamp(c.spin_rpm * (1.0 + 0.05 * k * normal(3)), 0.0, 30000.0);
+    c.spin_axis_deg = std::clamp(c.spin_axis_deg + 2.0 * k * normal(4), -180.0, 180.0);
+    shot.launch = c;
+  }
+  return shot;
+}
+
+absl::StatusOr<RoundStep> JudgeStroke(const Course& course, const RoundSettings& settings,
+                                      const RoundState& state, int seat,
+                                      const CourseShotResult& shot,
+                                      const std::function<bool()>& cancelled) {
+  if (absl::Status s = CheckTurn(course, settings, state, seat); !s.ok()) return s;
+  Referee ref(course, settings, state, cancelled);
+  RoundPlayer& p = ref.player(seat);
+  RoundBall& b = p.ball;
+  ++p.strokes;
+  ++ref.state().strokes;
+  b.last_spot_m = b.position_m;
+  b.last_lie = b.lie;
+  b.marked = false;
+  ref.Emit(RoundEventKind::kStroke, seat).position_m = b.position_m;
+  const GroundResult& g = shot.ground;
+  if (g.holed) {
+    b.position_m = g.rest_m;
+    b.lie = Terrain::kGreen;
+    b.holed = true;
+    ref.Emit(RoundEventKind::kHoled, seat).position_m = g.rest_m;
+  } else {
+    b.position_m = g.rest_m;
+    b.lie = shot.lie;
+    RoundEvent& rest = ref.Emit(RoundEventKind::kRest, seat);
+    rest.position_m = g.rest_m;
+    rest.lie = std::string(TerrainTag(shot.lie));
+    if (g.out_of_bounds || shot.lie == Terrain::kOutOfBounds) {
+      ref.Penalty(seat, 1, "out_of_bounds", "18.2b");
+      if (absl::Status s = ref.ReturnToLastSpot(seat); !s.ok()) return s;
+    } else if (IsPenaltyArea(shot.lie)) {
+      // Where the ball last crossed the penalty area's edge: the last point of its path
+      // outside, then bisection toward the next (the path's points are its lowest point's).
+      const double r = ref.r();
+      auto inside = [&](const Vector2d& q) {
+        return !course.terrain.Covers(q.x(), q.y()) || IsPenaltyArea(course.LieAt(q.x(), q.y(), r));
+      };
+      std::vector<Vector2d> pts;
+      pts.push_back(shot.start_m.head<2>());
+      for (const GroundSample& s : shot.path) pts.push_back(s.position_m.head<2>());
+      pts.push_back(g.rest_m.head<2>());
+      Vector2d crossing = shot.start_m.head<2>();
+      for (size_t i = pts.size() - 1; i-- > 0;) {
+        if (inside(pts[i])) continue;
+        Vector2d out = pts[i], in = pts[i + 1];
+        for (int k = 0; k < 50; ++k) {
+          const Vector2d mid = 0.5 * (out + in);
+          (inside(mid) ? in : out) = mid;
+        }
+        crossing = out;
+        break;
+      }
+      ref.OpenDecision(seat, "penalty_area", shot.lie, OnGround(course, crossing));
+    }
+  }
+  ref.Settle();
+  return ref.Take();
+}
+
+absl::StatusOr<RoundStep> PlayStroke(const Course& course, const RoundSettings& settings,
+                                     const RoundState& state, int seat, const RoundStroke& stroke,
+                                     CourseShotResult* shot_out,
+                                     const std::function<bool()>& cancelled) {
+  if (absl::Status s = CheckStroke(course, settings, state, seat, stroke); !s.ok()) return s;
+  absl::StatusOr<CourseShot> shot = StrokeShot(course, settings, state, seat, stroke);
+  if (!shot.ok()) return shot.status();
+  shot->flight.cancelled = cancelled;
+  shot->ground.cancelled = cancelled;
+  absl::StatusOr<CourseShotResult> result = PlayCourseShot(course, *shot);
+  if (!result.ok()) return result.status();
+  absl::StatusOr<RoundStep> step = JudgeStroke(course, settings, state, seat, *result, cancelled);
+  if (step.ok() && shot_out != nullptr) *shot_out = *std::move(result);
+  return step;
+}
+
+absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& settings,
+                                 const RoundState& state, int seat, const RoundChoice& choice,
+                                 const std::function<bool()>& cancelled) {
+  if (seat < 0 || seat >= static_cast<int>(state.players.size())) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("seat: %d is not a seat of the round (0 to %d)", seat, state.players.size() - 1));
+  }
+  if (state.over) return absl::FailedPreconditionError("the round is over");
+  Referee ref(course, settings, state, cancelled);
+  const double r = ref.r();
+  if (choice.choice == "unplayable") {
+    if (absl::Status s = CheckTurn(course, settings, state, seat); !s.ok()) return s;
+    const RoundPlayer& p = state.players[seat];
+    if (p.strokes == 0) {
+      return absl::FailedPreconditionError(
+          "no ball in play: a ball is in play once it has been struck from the teeing area (Rule 6.2)");
+    }
+    if (IsPenaltyArea(p.ball.lie)) {
+      return absl::FailedPreconditionError(
+          "a ball in a penalty area cannot be declared unplayable (Rule 19.1); the penalty area's "
+          "relief is Rule 17");
+    }
+    ref.OpenDecision(seat, "unplayable", p.ball.lie, p.ball.position_m);
+    return ref.Take();
+  }
+  if (!state.decision) {
+    return absl::FailedPreconditionError(
+        "no decision is pending (a choice answers a ball in a penalty area, Rule 17.1d, or one "
+        "declared unplayable, Rule 19: --choice unplayable)");
+  }
+  const RoundDecision d = *state.decision;
+  if (d.seat != seat) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "the decision is %s's (seat %d)", state.players[d.seat].name, d.seat));
+  }
+  if (std::find(d.choices.begin(), d.choices.end(), choice.choice) == d.choices.end()) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "choice: \"%s\" is not one of %s", choice.choice.substr(0, 24), absl::StrJoin(d.choices, ", ")));
+  }
+  const bool back = choice.choice == "back_on_the_line" ||
+                    choice.choice == "back_on_the_line_outside_bunker";
+  const bool outside_bunker = choice.choice == "back_on_the_line_outside_bunker";
+  if (choice.back_m && !back) {
+    return absl::InvalidArgumentError("back_m: only a back-on-the-line choice takes a distance");
+  }
+  Relief relief;
+  if (back) {
+    double distance = 0.0;
+    if (choice.back_m) {
+      if (!(*choice.back_m >= 0.0 && *choice.back_m <= kBackMaxM)) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("back_m: must be in [0, %g] m; got %g", kBackMaxM, *choice.back_m));
+      }
+      distance = *choice.back_m;
+      if (!UsableBackOnTheLine(course, state.hole,
+                               BackOnTheLine(course, state.hole, d, distance, outside_bunker), r)) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "back_m: the point %g m back on the line is out of bounds, in the area the relief is "
+            "from, or leaves no room to drop",
+            distance));
+      }
+    } else {
+      distance = *DefaultBack(course, state.hole, d, outside_bunker, r);  // offered: it exists
+    }
+    relief = BackOnTheLine(course, state.hole, d, distance, outside_bunker);
+  } else if (choice.choice == "lateral") {
+    relief = Lateral(d);
+  }
+  ref.state().decision.reset();
+  RoundEvent& e = ref.Emit(RoundEventKind::kChoice, seat);
+  e.choice = choice.choice;
+  e.reason = d.reason;
+  e.rule = RuleOf(d, choice.choice);
+  ref.Penalty(seat, outside_bunker ? 2 : 1, d.reason, RuleOf(d, choice.choice));
+  RoundBall& b = ref.player(seat).ball;
+  b.marked = false;
+  absl::Status s = choice.choice == "stroke_and_distance" ? ref.ReturnToLastSpot(seat)
+                                                          : ref.Drop(seat, relief);
+  if (!s.ok()) return s;
+  ref.Settle();
+  return ref.Take();
+}
+
+}  // namespace sportsim::golf

@@ -1,0 +1,264 @@
+// The referee of a round of golf under the Rules of Golf 2023 (R&A and USGA; docs/golf-rules.md
+// has the rules this implements, their numbers and what it leaves out): who plays next, what a
+// stroke's result means (holed, at rest, out of bounds, in a penalty area), the relief options
+// and their drops, the score. Like the billiards referees it is a set of pure functions of
+// (course, settings, state before, input) -> (state after, events): no clock, no unordered
+// container, and the only randomness a counter-based draw from the round's seed that the state
+// records, so a round replays bit for bit from its commands.
+//
+// A stroke is played by the course's physics (course_shot.h): StrokeShot turns a player's
+// stroke into the CourseShot the ball takes from where it lies (with the round's noise, if
+// any), PlayCourseShot flies and rolls it, JudgeStroke rules on the result. PlayStroke does
+// the three. A drop (Rule 14.3) is physics too: the ball is let fall from knee height on a
+// drawn point of the relief area and rolls out on the course; the referee runs it.
+//
+// Frame: the course's (x east, y north, z up, metres; headings ccw from +x). Seats are 0..n-1
+// in the order the players were given.
+#ifndef SPORTSIM_SIM_GOLF_ROUND_H_
+#define SPORTSIM_SIM_GOLF_ROUND_H_
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "absl/status/status.h"
+#include "absl/status/statusor.h"
+#include "sim/golf/course.h"
+#include "sim/golf/course_shot.h"
+
+namespace sportsim::golf {
+
+/// A club-length for relief areas (Rule 14.3b: the longest club but the putter): 45 inches, a
+/// typical driver (the Equipment Rules cap a club at 48 inches).
+inline constexpr double kClubLengthM = 1.143;
+/// Knee height, from which a ball is dropped (Rule 14.3b(2)) (m).
+inline constexpr double kKneeHeightM = 0.5;
+
+/// Order of play (Rule 6.4): the honour on the tee, then the ball farthest from the hole; or
+/// "ready golf" (6.4b note: allowed in stroke play), where any player whose ball is not holed
+/// may play.
+enum class OrderOfPlay : uint8_t { kHonour, kReady };
+std::string_view OrderOfPlayName(OrderOfPlay o);  ///< "honour", "ready"
+
+/// What a player may input: "realistic" refuses launches beyond human reach (RoundLimits),
+/// "arcade" only the physics' own bounds.
+enum class Realism : uint8_t { kRealistic, kArcade };
+std::string_view RealismName(Realism r);  ///< "realistic", "arcade"
+absl::StatusOr<Realism> RealismFromName(std::string_view name);
+
+/// The realistic profile's bounds on a stroke (docs/golf-rules.md "Strokes" has their sources).
+struct RoundLimits {
+  /// Ball speed: the clubhead's human limit (70 m/s, sim/swing/realism.h) times the largest
+  /// smash factor the conformance limit on the driver's face allows (about 1.52).
+  double max_ball_speed_mps = 107.0;
+  double min_launch_angle_deg = -20.0;
+  double max_launch_angle_deg = 75.0;
+  double max_launch_direction_deg = 45.0;  ///< either side of the aim
+  double max_spin_rpm = 12000.0;           ///< wedges off a tight lie reach about 11,000
+  double max_putt_speed_mps = 12.0;
+};
+inline constexpr RoundLimits kRoundLimits{};
+
+struct RoundPlayerSpec {
+  std::string name;  ///< 1-40 printable characters
+  std::string tee;   ///< a tee name of the holes ("" = each hole's first tee)
+};
+
+/// The round's settings, fixed at creation.
+struct RoundSettings {
+  int first_hole = 1, last_hole = 1;   ///< the holes played, in order (of the course's)
+  std::vector<RoundPlayerSpec> players;  ///< 1-8
+  OrderOfPlay order = OrderOfPlay::kHonour;
+  Realism realism = Realism::kRealistic;
+  /// The spread of launches and putts, 0 (none) to 5: at 1 a launch's speed has a standard
+  /// deviation of 1.5 %, its vertical angle 1 deg, its direction 1.5 deg, its spin 5 %, its
+  /// spin axis 2 deg; a putt's speed 3 % and its direction 0.5 deg.
+  double noise = 0.0;
+  uint64_t seed = 0;  ///< the draws of noise and drops
+  BallSpec ball;
+};
+
+/// Validates the settings against the course: holes in range and in order, 1-8 players with
+/// names, each player's tee a tee of some hole played, noise in [0, 5]. InvalidArgument names
+/// the field.
+absl::Status ValidateRoundSettings(const Course& course, const RoundSettings& settings);
+/// Sets a `--rule NAME=VALUE` of a round: order=honour|ready.
+absl::Status SetRoundVariant(std::string_view name, std::string_view value, RoundSettings* settings);
+
+/// The areas of the course (Rule 2.2).
+enum class CourseAreaKind : uint8_t { kGeneral, kTeeing, kPenaltyArea, kBunker, kGreen };
+std::string_view CourseAreaName(CourseAreaKind a);  ///< "general", "teeing", ...
+
+struct RoundBall {
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< on the ground
+  Terrain lie = Terrain::kTee;
+  bool holed = false;
+  /// On the putting green and lifted (its spot marked) while another player plays (13.1b).
+  bool marked = false;
+  /// Where the last stroke was made from and the lie there (stroke and distance, 14.6); before
+  /// the first stroke of a hole, the tee.
+  Eigen::Vector3d last_spot_m = Eigen::Vector3d::Zero();
+  Terrain last_lie = Terrain::kTee;
+};
+
+struct RoundPlayer {
+  std::string name;
+  std::string tee;
+  int strokes = 0;    ///< on the current hole, penalty strokes included
+  int penalties = 0;  ///< the penalty strokes among them
+  RoundBall ball;
+  /// Per hole of the round (index 0 = first_hole): the score, 0 while not yet completed.
+  std::vector<int> scores;
+  int Total() const;  ///< the completed holes' sum
+};
+
+/// A relief decision the seat must make before anyone plays on.
+struct RoundDecision {
+  int seat = 0;
+  std::string reason;  ///< "penalty_area" (Rule 17.1d) or "unplayable" (19)
+  Terrain area = Terrain::kRough;  ///< the penalty area's class, or the ball's lie
+  /// The reference for the options: where the ball last crossed the penalty area's edge, or
+  /// the unplayable ball's spot.
+  Eigen::Vector3d reference_m = Eigen::Vector3d::Zero();
+  /// "stroke_and_distance", "back_on_the_line", "lateral" and, for a ball in a bunker,
+  /// "back_on_the_line_outside_bunker" (two strokes), in this order; only those with a relief
+  /// area to drop in.
+  std::vector<std::string> choices;
+};
+
+struct RoundState {
+  int hole = 1;  ///< the hole being played (the course's number)
+  std::vector<RoundPlayer> players;
+  /// The order on this hole's tee (Rule 6.4a/b: seat order on the first, then the lowest score
+  /// on the hole before, ties keeping the order before).
+  std::vector<int> tee_order;
+  std::optional<RoundDecision> decision;
+  bool over = false;
+  /// When over: "finished" (all holes holed out); "" before.
+  std::string result;
+  /// When over: the seats with the lowest total, ascending (several: a tie).
+  std::vector<int> winners;
+  uint64_t draws = 0;   ///< seeded draws made so far
+  int64_t strokes = 0;  ///< strokes the round has played (all players)
+};
+
+enum class RoundEventKind : uint8_t {
+  kStroke,     ///< a stroke was made (from: position_m)
+  kHoled,      ///< the ball is in the hole (13.2c)
+  kRest,       ///< the ball came to rest (position_m, lie)
+  kPenalty,    ///< penalty strokes (penalty_strokes; reason; rule)
+  kDecision,   ///< a relief decision is pending (choices)
+  kChoice,     ///< the decision was made (choice)
+  kDrop,       ///< a drop (position_m: where it first touched; rest_m; in_area; attempt)
+  kPlaced,     ///< the ball was placed (position_m): after two failed drops, or on its spot
+  kMarked,     ///< the ball on the green was marked and lifted
+  kReplaced,   ///< and replaced for its owner's turn
+  kHoleEnd,    ///< the hole is complete (scores in the state)
+  kRoundEnd,   ///< the round is over (result, winners in the state)
+};
+/// "stroke", "holed", "rest", "penalty", "decision", "choice", "drop", "placed", "marked",
+/// "replaced", "hole_end", "round_end".
+std::string_view RoundEventName(RoundEventKind kind);
+
+struct RoundEvent {
+  RoundEventKind kind = RoundEventKind::kStroke;
+  int seat = -1;
+  int hole = 0;
+  int strokes = 0;  ///< the seat's strokes on the hole after the event
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rest_m = Eigen::Vector3d::Zero();  ///< kDrop
+  std::string lie;          ///< the lie's tag (kRest, kDrop, kPlaced)
+  int penalty_strokes = 0;  ///< kPenalty
+  std::string reason;       ///< kPenalty, kDecision: out_of_bounds, penalty_area, unplayable, ...
+  std::string rule;         ///< the Rule's number, e.g. "18.2b"
+  std::vector<std::string> choices;  ///< kDecision
+  std::string choice;       ///< kChoice
+  int attempt = 0;          ///< kDrop: 1 or 2
+  bool in_area = false;     ///< kDrop: it came to rest in the relief area
+};
+
+struct RoundStep {
+  RoundState state;
+  std::vector<RoundEvent> events;
+};
+
+/// A player's stroke: a launch (ball speed, angles, spin) or a putt, toward `aim_deg` (the pin
+/// when unset). The ball is played where it lies: a stroke has no position.
+struct RoundStroke {
+  enum class Kind : uint8_t { kLaunch, kPutt };
+  Kind kind = Kind::kLaunch;
+  LaunchConditions launch;  ///< kLaunch (its direction and spin axis relative to the aim)
+  double speed_mps = 0.0;   ///< kPutt
+  std::optional<double> aim_deg;
+  bool flagstick_in = true;  ///< Rule 13.2: the player's choice, in or out
+};
+
+/// A relief choice: one of the decision's choices; `back_m` is how far behind the reference
+/// point on the line from the hole the back-on-the-line reference point is (m; unset: the
+/// nearest point behind that the relief area mostly allows).
+struct RoundChoice {
+  std::string choice;
+  std::optional<double> back_m;
+};
+
+/// The round at its first tee: every ball on its player's tee, the honour in seat order.
+absl::StatusOr<RoundState> StartRound(const Course& course, const RoundSettings& settings);
+
+/// The seat to play next under the honour order (-1 when the round is over): the seat with a
+/// pending decision; else, among balls not holed, those not yet struck from the tee in the
+/// tee order; then the ball farthest from the hole (ties: the lower seat).
+int ToPlay(const Course& course, const RoundSettings& settings, const RoundState& state);
+/// The seats that may play now: ToPlay's, or under ready golf every seat not holed (none while
+/// a decision is pending).
+std::vector<int> MayPlay(const Course& course, const RoundSettings& settings,
+                         const RoundState& state);
+
+/// FailedPrecondition naming the Rule when `seat` may not play now (the round is over, a
+/// decision is pending, another seat's turn, the ball is holed); InvalidArgument naming the
+/// field for a stroke outside the realistic profile (RoundLimits) or the physics' ranges.
+absl::Status CheckStroke(const Course& course, const RoundSettings& settings,
+                         const RoundState& state, int seat, const RoundStroke& stroke);
+/// The shot the stroke gives: from the seat's ball, at its hole, the round's noise drawn from
+/// the seed (the round's stroke count picks the draws).
+absl::StatusOr<CourseShot> StrokeShot(const Course& course, const RoundSettings& settings,
+                                      const RoundState& state, int seat,
+                                      const RoundStroke& stroke);
+/// Rules on the stroke's result: the stroke counts; holed, at rest, out of bounds (stroke and
+/// distance, 18.2b: the ball back where the stroke was made, per 14.6), or in a penalty area
+/// (a decision with its choices, 17.1d); the marks on the green; the hole's and the round's
+/// end. `cancelled` is polled by the drops' physics.
+absl::StatusOr<RoundStep> JudgeStroke(const Course& course, const RoundSettings& settings,
+                                      const RoundState& state, int seat,
+                                      const CourseShotResult& shot,
+                                      const std::function<bool()>& cancelled = {});
+
+/// The stroke played and judged: CheckStroke, StrokeShot, PlayCourseShot, JudgeStroke. The
+/// shot's result (for its path and events) is written to `shot` when given.
+absl::StatusOr<RoundStep> PlayStroke(const Course& course, const RoundSettings& settings,
+                                     const RoundState& state, int seat, const RoundStroke& stroke,
+                                     CourseShotResult* shot = nullptr,
+                                     const std::function<bool()>& cancelled = {});
+
+/// A seat's relief decision: one of the pending decision's choices (the penalty counted, the
+/// ball dropped or placed where the Rule says), or "unplayable" when it is the seat's turn and
+/// no decision is pending (Rule 19.1: anywhere but in a penalty area; it opens a decision).
+/// FailedPrecondition names the Rule when the seat may not decide now; InvalidArgument names
+/// the choice when it is not one of the offered.
+absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& settings,
+                                 const RoundState& state, int seat, const RoundChoice& choice,
+                                 const std::function<bool()>& cancelled = {});
+
+/// The area of the course (Rule 2.2) of a lie at a spot, for the hole being played: tees and
+/// greens of other holes are general area.
+CourseAreaKind AreaOfCourse(const Course& course, int hole, const Eigen::Vector2d& spot,
+                            double ball_radius_m);
+
+}  // namespace sportsim::golf
+
+#endif  // SPORTSIM_SIM_GOLF_ROUND_H_
