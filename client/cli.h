@@ -105,6 +105,7 @@ int RunGolf(const Context& ctx, const std::vector<std::string>& args);
 int RunCourse(const Context& ctx, const std::vector<std::string>& args);
 int RunShot(const Context& ctx, const std::vector<std::string>& args);
 int RunTable(const Context& ctx, const std::vector<std::string>& args);
+int RunRound(const Context& ctx, const std::vector<std::string>& args);
 
 /// A usage error's message when a games flag (--game, --race-to, --shot-clock, --start, --rule,
 /// --call, --safety, --push-out, --nominate, --choice) is given to a command that does not take

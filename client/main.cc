@@ -74,6 +74,16 @@ Commands:
   course list               the server's golf courses: holes, pars, lengths
   course show NAME [--hole N] [--svg FILE]   a course's holes (tees, pin, par, stroke index,
       length), its surfaces' constants; --svg draws it from above (surfaces, elevation)
+  round create --players NAME,NAME [--course NAME] [--holes A-B] [--tees NAME,NAME]
+      [--profile realistic|arcade] [--noise X] [--seed N] [--rule order=honour|ready]
+      [--tick-hz HZ] [--fast-forward]   a round of golf (stroke play, the Rules of Golf);
+      prints the seat tokens and the admin token
+  round list | round get ID | round scorecard ID | round record ID | round delete ID --token T
+  round stroke ID --token T (--ball-speed MPS --launch-deg DEG --spin-rpm RPM
+      [--spin-axis-deg DEG] [--launch-direction-deg DEG] [--aim-deg DEG] | --putt-speed MPS
+      [--putt-direction-deg DEG]) [--flagstick=false]   the seat's ball, where it lies
+  round decide ID --token T --choice CHOICE [--back-m M]   relief (or unplayable)
+  round watch ID [--rate HZ] [--until-rest] [--from-sequence N]   the round's events
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:
       --table pool-7ft|pool-8ft|pool-9ft|snooker|carom|unbounded  --rack RACK
       [--ball ID@X,Y ...] (--speed V0 | --ball-speed V) [--phi DEG] [--theta DEG] [--a A]
@@ -651,6 +661,7 @@ int main(int argc, char** argv) {
   if (command == "course") return RunCourse(ctx, rest);
   if (command == "shot") return RunShot(ctx, rest);
   if (command == "table") return RunTable(ctx, rest);
+  if (command == "round") return RunRound(ctx, rest);
   return UsageError("unknown command '" + command +
-                    "' (info, health, swing, flight, golf, course, shot, table)");
+                    "' (info, health, swing, flight, golf, course, shot, table, round)");
 }

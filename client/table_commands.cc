@@ -659,13 +659,15 @@ std::optional<std::string> CheckGameFlags(std::string_view command, std::string_
       {"choice", "--choice", "decide"},      {"aim_lines", "--aim-lines", "create"},
   };
   const bool table = command == "table";
+  const bool round = command == "round";
   for (const Use& u : kUses) {
+    if (round && std::string_view(u.flag) == "choice" && sub == "decide") continue;
     if (Given(u.flag) && !(table && sub == u.verb)) {
       return absl::StrCat(u.shown, " applies to table ", u.verb, " only");
     }
   }
-  if (!RepeatedFlagValues("rule").empty() && !(table && sub == "create")) {
-    return "--rule applies to table create only";
+  if (!RepeatedFlagValues("rule").empty() && !((table || round) && sub == "create")) {
+    return "--rule applies to table create and round create only";
   }
   return std::nullopt;
 }

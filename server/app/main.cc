@@ -62,6 +62,8 @@ ABSL_FLAG(Seconds, min_client_ping_interval, Seconds{absl::Seconds(10)},
 ABSL_FLAG(int, max_sessions, 2000, "Most swing sessions the server holds at once");
 ABSL_FLAG(int, max_watchers_per_session, 64,
           "Most WatchSwing and DriveSwing streams per swing session");
+ABSL_FLAG(int, max_rounds, 2000, "Most golf rounds the server holds at once");
+ABSL_FLAG(int, max_watchers_per_round, 64, "Most WatchRound streams per round");
 ABSL_FLAG(int, tick_workers, 0,
           "Threads that tick the tables and swing sessions (one pool); 0: one per core");
 ABSL_FLAG(int, max_catchup_ticks, 12,
@@ -172,6 +174,9 @@ int main(int argc, char** argv) {
   config.sessions.world.max_worlds = absl::GetFlag(FLAGS_max_sessions);
   config.sessions.world.max_watchers = absl::GetFlag(FLAGS_max_watchers_per_session);
   config.sessions.world.max_catchup_ticks = config.tables.world.max_catchup_ticks;
+  config.rounds.world.max_worlds = absl::GetFlag(FLAGS_max_rounds);
+  config.rounds.world.max_watchers = absl::GetFlag(FLAGS_max_watchers_per_round);
+  config.rounds.world.max_catchup_ticks = config.tables.world.max_catchup_ticks;
   const double clock_rate = absl::GetFlag(FLAGS_clock_rate);
   if (!(clock_rate >= 0.01 && clock_rate <= 1000)) {
     std::cerr << "sportsim-server: --clock_rate must be in [0.01, 1000], got " << clock_rate
@@ -231,6 +236,8 @@ int main(int argc, char** argv) {
   config.tables.world.clock_rate = clock_rate;
   config.sessions.world.clock_rate = clock_rate;
   config.sessions.world.watcher_backlog = config.tables.world.watcher_backlog;
+  config.rounds.world.clock_rate = clock_rate;
+  config.rounds.world.watcher_backlog = config.tables.world.watcher_backlog;
   const struct {
     const char* name;
     int value, lo, hi;
@@ -250,7 +257,9 @@ int main(int argc, char** argv) {
                 {"event_log", config.tables.world.event_log, 1, 10000000},
                 {"watcher_backlog", config.tables.world.watcher_backlog, 1, 10000000},
                 {"max_sessions", config.sessions.world.max_worlds, 1, 1000000},
-                {"max_watchers_per_session", config.sessions.world.max_watchers, 1, 100000}};
+                {"max_watchers_per_session", config.sessions.world.max_watchers, 1, 100000},
+                {"max_rounds", config.rounds.world.max_worlds, 1, 1000000},
+                {"max_watchers_per_round", config.rounds.world.max_watchers, 1, 100000}};
   for (const auto& c : checks) {
     if (c.value < c.lo || c.value > c.hi) {
       std::cerr << "sportsim-server: --" << c.name << " must be in [" << c.lo << ", " << c.hi

@@ -167,9 +167,11 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
   app->scheduler_ = std::make_unique<TickScheduler>(config.tick_workers);
   app->tables_ = std::make_unique<TableRegistry>(config.tables, app->scheduler_.get());
   app->sessions_ = std::make_unique<SessionRegistry>(config.sessions, app->scheduler_.get());
+  app->rounds_ = std::make_unique<RoundRegistry>(config.rounds, app->scheduler_.get());
   if (app->store_ != nullptr) {
     app->tables_->SetJournal(app->store_.get());
     app->sessions_->SetJournal(app->store_.get());
+    app->rounds_->SetJournal(app->store_.get());
     // Every world of this node comes back before the first call is served.
     absl::StatusOr<std::vector<StoredWorld>> mine = app->store_->Load();
     if (!mine.ok()) return mine.status();
@@ -181,7 +183,7 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
     }
   }
   app->pool_ = std::make_unique<WorkPool>(config.work);
-  app->services_.push_back(MakeSwingService(app->sessions_.get(), app->pool_.get()));
+  app->services_.push_back(MakeSwingService(app->sessions_.get(), app->rounds_.get(), app->pool_.get()));
   app->services_.push_back(MakeBilliardsService(app->tables_.get(), app->pool_.get(),
                                                 config.max_send_message_bytes,
                                                 absl::ToDoubleSeconds(config.work.cpu_budget),
@@ -271,6 +273,9 @@ void ServerApp::RestoreWorlds(const std::vector<StoredWorld>& worlds) {
     } else if (w.kind == "session") {
       s = sessions_->Restore(w);
       r.sessions += s.ok();
+    } else if (w.kind == "round") {
+      s = rounds_->Restore(w);
+      r.rounds += s.ok();
     } else {
       s = absl::DataLossError(absl::StrFormat("%s: unknown kind %s", w.world_id, w.kind));
     }
@@ -282,13 +287,14 @@ void ServerApp::RestoreWorlds(const std::vector<StoredWorld>& worlds) {
   r.seconds = absl::ToDoubleSeconds(absl::Now() - start);
   if (!worlds.empty()) {
     std::cerr << absl::StrFormat(
-        "sportsim-server: restored %d tables and %d sessions from %s in %.3f s%s\n", r.tables,
-        r.sessions, store_->Describe(), r.seconds,
+        "sportsim-server: restored %d tables, %d sessions and %d rounds from %s in %.3f s%s\n",
+        r.tables, r.sessions, r.rounds, store_->Describe(), r.seconds,
         r.failed > 0 ? absl::StrFormat(" (%d failed)", r.failed) : "");
   }
   absl::MutexLock lock(&monitor_mu_);
   restored_.tables += r.tables;
   restored_.sessions += r.sessions;
+  restored_.rounds += r.rounds;
   restored_.failed += r.failed;
   restored_.seconds += r.seconds;
 }
@@ -355,6 +361,7 @@ void ServerApp::Shutdown(absl::Duration grace) {
   server_->GetHealthCheckService()->SetServingStatus(false);
   tables_->Shutdown(absl::UnavailableError("the server is shutting down"));
   sessions_->Shutdown(absl::UnavailableError("the server is shutting down"));
+  rounds_->Shutdown(absl::UnavailableError("the server is shutting down"));
   if (web_ != nullptr) web_->Shutdown();
   scheduler_->Stop();
   // Queued simulations end now (UNAVAILABLE); running ones get the grace, then stop at their

@@ -16,6 +16,7 @@
 #include "server/rpc/grpc_web.h"
 #include "server/rpc/services.h"
 #include "server/store/store.h"
+#include "server/swing/round_world.h"
 #include "server/swing/session_world.h"
 #include "server/world/work_pool.h"
 #include "server/billiards/table_world.h"
@@ -46,6 +47,7 @@ struct ServerConfig {
   absl::Duration min_client_ping_interval = absl::Seconds(10);   ///< --min_client_ping_interval
   TableLimits tables;
   SessionLimits sessions;
+  RoundLimits rounds;
   /// gRPC-Web and the viewer: listen address ("" = off), files, allowed origins.
   std::string http_listen;
   std::string web_root = kDefaultWebRoot;
@@ -65,6 +67,7 @@ struct ServerConfig {
 struct RestoreReport {
   int tables = 0;
   int sessions = 0;
+  int rounds = 0;
   int failed = 0;        ///< worlds that could not be restored (logged, left in the store)
   double seconds = 0.0;  ///< wall time of the restore
 };
@@ -101,6 +104,7 @@ class ServerApp {
   int metrics_port() const;
   TableRegistry& tables() { return *tables_; }
   SessionRegistry& sessions() { return *sessions_; }
+  RoundRegistry& rounds() { return *rounds_; }
   WorkPool& pool() { return *pool_; }
   std::string address() const;
   /// The journal, or null when everything is in memory.
@@ -127,6 +131,7 @@ class ServerApp {
   std::unique_ptr<WorkPool> pool_;            // outlives the services that queue on it
   std::unique_ptr<TableRegistry> tables_;  // the registries outlive the services
   std::unique_ptr<SessionRegistry> sessions_;
+  std::unique_ptr<RoundRegistry> rounds_;
   std::unique_ptr<RpcCounters> rpc_counters_;   // outlives the gRPC server (its interceptor)
   std::unique_ptr<MetricsEndpoint> metrics_;    // goes before the registries it reads
   std::vector<std::unique_ptr<grpc::Service>> services_;

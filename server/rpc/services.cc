@@ -17,6 +17,7 @@
 #include "server/billiards/game_convert.h"
 #include "server/rpc/status.h"
 #include "server/world/work_pool.h"
+#include "server/swing/round_world.h"
 #include "server/swing/session_world.h"
 #include "server/billiards/table_world.h"
 #include "sim/billiards/shot.h"
@@ -233,10 +234,12 @@ class DriveReactor final : public grpc::ServerBidiReactor<v1::DriveSwingRequest,
 
 class SwingService final : public v1::Swing::CallbackService {
  public:
-  SwingService(SessionRegistry* sessions, WorkPool* pool) : sessions_(sessions), pool_(pool) {}
+  SwingService(SessionRegistry* sessions, RoundRegistry* rounds, WorkPool* pool)
+      : sessions_(sessions), rounds_(rounds), pool_(pool) {}
 
  private:
   SessionRegistry* const sessions_;
+  RoundRegistry* const rounds_;
   WorkPool* const pool_;
 
   grpc::ServerUnaryReactor* CreateSession(grpc::CallbackServerContext* ctx,
@@ -287,6 +290,58 @@ class SwingService final : public v1::Swing::CallbackService {
       grpc::CallbackServerContext*, const v1::WatchSwingRequest* request) override {
     return new WatchReactor<SessionRegistry, SwingWatcher, v1::WatchSwingRequest>(
         sessions_, *request, request->session_id());
+  }
+
+  grpc::ServerUnaryReactor* CreateRound(grpc::CallbackServerContext* ctx,
+                                        const v1::CreateRoundRequest* request,
+                                        v1::CreateRoundResponse* response) override {
+    return Unary(ctx, response, [&] { return rounds_->Create(*request); });
+  }
+  grpc::ServerUnaryReactor* GetRound(grpc::CallbackServerContext* ctx,
+                                     const v1::GetRoundRequest* request,
+                                     v1::RoundInfo* response) override {
+    return Unary(ctx, response, [&] { return rounds_->Get(*request); });
+  }
+  grpc::ServerUnaryReactor* ListRounds(grpc::CallbackServerContext* ctx,
+                                       const v1::ListRoundsRequest* request,
+                                       v1::ListRoundsResponse* response) override {
+    return Unary(ctx, response, [&] { return rounds_->List(*request); });
+  }
+  grpc::ServerUnaryReactor* DeleteRound(grpc::CallbackServerContext* ctx,
+                                        const v1::DeleteRoundRequest* request,
+                                        v1::DeleteRoundResponse* response) override {
+    return Unary(ctx, response, [&]() -> absl::StatusOr<v1::DeleteRoundResponse> {
+      if (absl::Status s = rounds_->Delete(*request); !s.ok()) return s;
+      return v1::DeleteRoundResponse();
+    });
+  }
+  grpc::ServerUnaryReactor* PlayStroke(grpc::CallbackServerContext* ctx,
+                                       const v1::PlayStrokeRequest* request,
+                                       v1::PlayStrokeResponse* response) override {
+    // The stroke is simulated (flight and ground, a millisecond or so) before it takes effect:
+    // a simulation like any other, on the pool, under its budget.
+    return Pooled(pool_, ctx, [this, request, response](const WorkControl& control) -> absl::Status {
+      absl::StatusOr<v1::PlayStrokeResponse> r =
+          rounds_->Stroke(*request, [&control] { return control.ShouldStop(); });
+      if (!r.ok()) return r.status();
+      *response = *std::move(r);
+      return absl::OkStatus();
+    });
+  }
+  grpc::ServerUnaryReactor* DecideRound(grpc::CallbackServerContext* ctx,
+                                        const v1::DecideRoundRequest* request,
+                                        v1::DecideRoundResponse* response) override {
+    return Unary(ctx, response, [&] { return rounds_->Decide(*request); });
+  }
+  grpc::ServerWriteReactor<v1::RoundSnapshot>* WatchRound(
+      grpc::CallbackServerContext*, const v1::WatchRoundRequest* request) override {
+    return new WatchReactor<RoundRegistry, RoundWatcher, v1::WatchRoundRequest>(
+        rounds_, *request, request->round_id());
+  }
+  grpc::ServerUnaryReactor* GetRoundRecord(grpc::CallbackServerContext* ctx,
+                                           const v1::GetRoundRecordRequest* request,
+                                           v1::RoundRecord* response) override {
+    return Unary(ctx, response, [&] { return rounds_->Record(*request); });
   }
 
   grpc::ServerUnaryReactor* SimulateSwing(grpc::CallbackServerContext* ctx,
@@ -764,6 +819,11 @@ v1::GetInfoResponse MakeServerInfo() {
   GamesToProto(caps->mutable_games());
   for (std::string_view c : golf::BuiltinCourseNames()) caps->add_golf_courses(std::string(c));
   for (const golf::Surface& s : golf::BuiltinSurfaces()) caps->add_golf_surfaces(s.name);
+  caps->add_golf_round_rules("order=honour|ready");
+  for (const char* c : {"stroke_and_distance", "back_on_the_line", "lateral",
+                        "back_on_the_line_outside_bunker", "unplayable"}) {
+    caps->add_golf_round_choices(c);
+  }
   *caps->mutable_presets() = caps->table_presets();
   caps->add_services(v1::Server::service_full_name());
   caps->add_services(v1::Swing::service_full_name());
@@ -774,8 +834,9 @@ v1::GetInfoResponse MakeServerInfo() {
 }
 
 std::unique_ptr<grpc::Service> MakeInfoService() { return std::make_unique<InfoService>(); }
-std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkPool* pool) {
-  return std::make_unique<SwingService>(sessions, pool);
+std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, RoundRegistry* rounds,
+                                                WorkPool* pool) {
+  return std::make_unique<SwingService>(sessions, rounds, pool);
 }
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
                                                     int64_t max_reply_bytes,

@@ -13,6 +13,7 @@
 namespace sportsim::server {
 
 class SessionRegistry;
+class RoundRegistry;
 class TableRegistry;
 class WorkPool;
 
@@ -29,7 +30,8 @@ v1::GetInfoResponse MakeServerInfo();
 std::unique_ptr<grpc::Service> MakeInfoService();
 /// Swing: SimulateSwing, SimulateFlight and the sessions of `sessions`. Simulations (and
 /// StartSwing, whose dry run is one) run on `pool`. Both must outlive the service.
-std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, WorkPool* pool);
+std::unique_ptr<grpc::Service> MakeSwingService(SessionRegistry* sessions, RoundRegistry* rounds,
+                                                WorkPool* pool);
 /// Billiards: SimulateShot (on `pool`) and the tables of `tables`. Both must outlive it.
 std::unique_ptr<grpc::Service> MakeBilliardsService(TableRegistry* tables, WorkPool* pool,
                                                     int64_t max_reply_bytes,

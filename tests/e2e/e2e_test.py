@@ -187,6 +187,63 @@ class CliAgainstServer(unittest.TestCase):
             self.assertNotEqual(r.returncode, 0)
             self.assertIn(message, r.stderr)
 
+    def test_round_create_stroke_decide_scorecard_record(self):
+        a = self.server.address
+        r = cli(a, "--format", "json", "round", "create", "--players", "Ann,Bob", "--holes",
+                "2-2", "--tees", "white,red", "--fast-forward")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        made = json.loads(r.stdout)
+        for key in ("round_id", "seats", "admin_token"):
+            self.assertIn(key, made)
+        self.assertEqual([(s["seat"], s["name"]) for s in made["seats"]], [(0, "Ann"), (1, "Bob")])
+        rid, ann, bob = made["round_id"], made["seats"][0]["token"], made["seats"][1]["token"]
+        # Bob is not first on the tee: refused, naming the Rule; nothing changed.
+        r = cli(a, "round", "stroke", rid, "--token", bob, "--putt-speed", "3")
+        self.assertEqual(r.returncode, 9, r.stderr)  # FAILED_PRECONDITION
+        self.assertIn("Rule 6.4", r.stderr)
+        # Ann's tee shot, short into the pond.
+        r = cli(a, "round", "stroke", rid, "--token", ann, "--ball-speed", "30", "--launch-deg",
+                "20", "--spin-rpm", "5000", "--aim-deg", "88")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        time.sleep(0.3)
+        r = cli(a, "--format", "json", "round", "get", rid)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        state = json.loads(r.stdout)["round"]
+        for key in ("play", "hole", "to_play", "players", "decision", "result", "winner"):
+            self.assertIn(key, state)
+        for key in ("seat", "name", "strokes", "score", "ball"):
+            self.assertIn(key, state["players"][0])
+        self.assertEqual(set(state["players"][0]["ball"]) >= {"x_m", "y_m", "z_m", "lie",
+                                                              "distance_to_pin_m", "holed"}, True)
+        self.assertEqual(state["players"][0]["ball"]["lie"], "water_hazard")
+        self.assertEqual(state["decision"]["seat"], 0)
+        self.assertEqual(state["decision"]["choices"], ["stroke_and_distance", "back_on_the_line"])
+        r = cli(a, "round", "get", rid)
+        self.assertIn("Ann must decide", r.stdout)
+        self.assertIn("yellow penalty area", r.stdout)
+        r = cli(a, "round", "decide", rid, "--token", ann, "--choice", "lateral")
+        self.assertEqual(r.returncode, 3, r.stderr)  # a yellow area has no lateral relief
+        r = cli(a, "round", "decide", rid, "--token", ann, "--choice", "back_on_the_line")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("Bob to play", r.stdout)
+        r = cli(a, "round", "scorecard", rid)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("Ann", r.stdout)
+        r = cli(a, "--format", "json", "round", "record", rid)
+        record = json.loads(r.stdout)
+        self.assertEqual([("stroke" in c, "decide" in c) for c in record["commands"]],
+                         [(True, False), (False, True)])
+        self.assertEqual(record["commands"][1]["decide"]["choice"], "back_on_the_line")
+        r = cli(a, "round", "delete", rid, "--token", ann)
+        self.assertEqual(r.returncode, 7, r.stderr)  # PERMISSION_DENIED: the admin deletes
+        r = cli(a, "round", "delete", rid, "--token", made["admin_token"])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = cli(a, "round", "create", "--players", "Ann", "--play", "match")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("--play", r.stderr)
+        r = cli(a, "round", "create")
+        self.assertEqual(r.returncode, 64, r.stderr)
+
     def test_info_lists_billiards(self):
         r = cli(self.server.address, "info", "--format", "json")
         self.assertEqual(r.returncode, 0, r.stderr)
@@ -943,7 +1000,7 @@ class GamesAgainstServer(unittest.TestCase):
                 (("table", "shoot", "t-x", "--token", "x", "--ball-speed", "1", "--call", "1"),
                  "--call must be BALL:POCKET"),
                 (("shot", "simulate", "--ball-speed", "1", "--rule", "target=10"),
-                 "--rule applies to table create only"),
+                 "--rule applies to table create and round create only"),
                 (("table", "create", "--game", "9ball", "--rule", "target"),
                  "--rule must be NAME=VALUE"),
                 (("table", "create", "--game", "9ball", "--start", "late"),

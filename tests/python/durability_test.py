@@ -236,6 +236,50 @@ class Watcher(threading.Thread):
             pass
 
 
+def wait_round_at_rest(server, round_id, timeout=60):
+    """Waits until no ball of the round moves; returns its RoundInfo."""
+    deadline = time.monotonic() + timeout
+    while True:
+        info = server.swings.GetRound(sp.GetRoundRequest(round_id=round_id), timeout=10)
+        if not info.round.stroke_in_play:
+            return info
+        if time.monotonic() > deadline:
+            raise AssertionError("round %s: a ball still moves after %g s" % (round_id, timeout))
+        time.sleep(0.02)
+
+
+def round_command(state):
+    """A scripted player's next command from the round's state, the same on any server holding
+    the same state: a pending decision's last choice; else, for the seat to play, a putt on or
+    near the green, otherwise a launch toward the pin sized by the distance."""
+    if state.HasField("decision") and state.decision.choices:
+        return state.decision.seat, "decide", state.decision.choices[-1]
+    seat = state.to_play
+    ball = state.players[seat].ball
+    d = ball.distance_to_pin_m
+    if ball.lie == "green" or d < 20:
+        return seat, "putt", min(12.0, 1.4 * (1.2 * (d + 0.3)) ** 0.5)
+    return seat, "launch", min(70.0, 4.5 * d ** 0.5)
+
+
+def play_round_command(server, round_id, tokens):
+    """Plays round_command on the round at rest; returns what was played."""
+    info = wait_round_at_rest(server, round_id)
+    seat, kind, value = round_command(info.round)
+    if kind == "decide":
+        server.swings.DecideRound(sp.DecideRoundRequest(round_id=round_id, token=tokens[seat],
+                                                        choice=value), timeout=10)
+    elif kind == "putt":
+        server.swings.PlayStroke(sp.PlayStrokeRequest(round_id=round_id, token=tokens[seat],
+                                                      putt_speed_mps=value), timeout=30)
+    else:
+        server.swings.PlayStroke(sp.PlayStrokeRequest(
+            round_id=round_id, token=tokens[seat],
+            launch=sp.LaunchConditions(ball_speed_mps=value, launch_angle_deg=20,
+                                       spin_rpm=5000)), timeout=30)
+    return seat, kind, value
+
+
 class DurabilityBase:
     """The restart tests, for a journal given by journal_args()."""
 
@@ -360,6 +404,59 @@ class DurabilityBase:
                              [(a.kind, a.seat) for a in ref_record.actions])
             self.assertEqual([a.verdict for a in record.actions],
                              [a.verdict for a in ref_record.actions])
+        finally:
+            s.stop()
+
+    def test_round_survives_kill9(self):
+        # Two players on the three holes, strokes taking table time (no fast-forward), the
+        # server killed twice while a ball moves. The reference: the same commands uninterrupted
+        # in memory. Commands follow from the round's state, so equal states mean equal rounds.
+        create = sp.CreateRoundRequest(course="sportsim_links",
+                                       players=[sp.RoundPlayerSpec(name="Ann"),
+                                                sp.RoundPlayerSpec(name="Bob", tee="red")],
+                                       seed=5, noise=0.5, tick_hz=30)
+        commands = 14
+
+        def play(server, kills=()):
+            created = server.swings.CreateRound(create, timeout=30)
+            rid, tokens = created.round_id, [seat.token for seat in created.seats]
+            played = []
+            for i in range(commands):
+                played.append(play_round_command(server, rid, tokens))
+                if i in kills:
+                    time.sleep(0.3)
+                    moving = server.swings.GetRound(sp.GetRoundRequest(round_id=rid), timeout=10)
+                    server.kill9()
+                    server = self.start("--clock_rate", "2")
+                    info = server.swings.GetRound(sp.GetRoundRequest(round_id=rid), timeout=10)
+                    self.assertEqual(info.round.strokes, moving.round.strokes)
+                    self.assertGreaterEqual(info.tick, moving.tick)
+            end = wait_round_at_rest(server, rid)
+            record = server.swings.GetRoundRecord(sp.GetRoundRecordRequest(round_id=rid),
+                                                  timeout=10)
+            return server, played, end, record, tokens
+
+        ref = Server([], "--clock_rate", "2")
+        try:
+            _, ref_played, ref_end, ref_record, _ = play(ref)
+        finally:
+            ref.stop()
+        self.assertGreater(ref_end.round.strokes, 8)
+
+        s = self.start("--clock_rate", "2")
+        s, played, end, record, tokens = play(s, kills=(3, 9))
+        try:
+            self.assertEqual(played, ref_played)
+            self.assertEqual(end.round, ref_end.round)  # every field, every double, bit for bit
+            self.assertEqual([(c.seat, c.WhichOneof("command")) for c in record.commands],
+                             [(c.seat, c.WhichOneof("command")) for c in ref_record.commands])
+            self.assertEqual(record.round, ref_record.round)
+            # The seats' tokens still work, and only they.
+            with self.assertRaises(grpc.RpcError) as e:
+                s.swings.PlayStroke(sp.PlayStrokeRequest(round_id=end.round_id, token="x" * 32,
+                                                         putt_speed_mps=1), timeout=10)
+            self.assertEqual(e.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
+            play_round_command(s, end.round_id, tokens)
         finally:
             s.stop()
 

@@ -1,0 +1,412 @@
+// `sportsim round create|list|get|delete|stroke|decide|watch|scorecard|record`: rounds of golf
+// on a course (Swing/CreateRound ... WatchRound, GetRoundRecord).
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+
+#include "absl/flags/declare.h"
+#include "absl/flags/flag.h"
+#include "absl/strings/numbers.h"
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "absl/strings/str_join.h"
+#include "absl/strings/str_split.h"
+#include "client/cli.h"
+#include "sportsim/v1/swing.grpc.pb.h"
+
+// Shared with golf simulate (golf_commands.cc), flight simulate, the table and swing commands.
+ABSL_DECLARE_FLAG(std::string, course);
+ABSL_DECLARE_FLAG(std::optional<double>, ball_speed);
+ABSL_DECLARE_FLAG(std::optional<double>, launch_deg);
+ABSL_DECLARE_FLAG(std::optional<double>, spin_rpm);
+ABSL_DECLARE_FLAG(double, spin_axis_deg);
+ABSL_DECLARE_FLAG(double, launch_direction_deg);
+ABSL_DECLARE_FLAG(std::optional<double>, aim_deg);
+ABSL_DECLARE_FLAG(std::optional<double>, putt_speed);
+ABSL_DECLARE_FLAG(double, putt_direction_deg);
+ABSL_DECLARE_FLAG(bool, flagstick);
+ABSL_DECLARE_FLAG(std::string, token);
+ABSL_DECLARE_FLAG(std::string, choice);
+ABSL_DECLARE_FLAG(double, tick_hz);
+ABSL_DECLARE_FLAG(std::optional<double>, rate);
+ABSL_DECLARE_FLAG(std::optional<uint64_t>, from_sequence);
+ABSL_DECLARE_FLAG(bool, until_rest);
+ABSL_DECLARE_FLAG(int, page_size);
+ABSL_DECLARE_FLAG(std::string, page_token);
+ABSL_DECLARE_FLAG(std::string, profile);
+ABSL_DECLARE_FLAG(double, noise);
+ABSL_DECLARE_FLAG(uint64_t, seed);
+
+ABSL_FLAG(std::string, holes, "", "round create: the holes played, A-B (default all)");
+ABSL_FLAG(std::vector<std::string>, players, {}, "round create: the players' names, in seat order");
+ABSL_FLAG(std::vector<std::string>, tees, {}, "round create: each player's tee, in seat order");
+ABSL_FLAG(std::string, play, "stroke", "round create: the form of play (stroke)");
+ABSL_FLAG(std::vector<std::string>, handicaps, {}, "round create: handicap indexes (not yet)");
+ABSL_FLAG(bool, fast_forward, false, "round create: each stroke comes to rest at the next tick");
+ABSL_FLAG(std::optional<double>, back_m, std::nullopt,
+          "round decide: back-on-the-line, metres behind the reference point");
+
+namespace sportsim::cli {
+namespace {
+
+using Stub = v1::Swing::Stub;
+constexpr double kMetresPerYard = 0.9144;
+
+template <typename Response>
+int Print(const Context& ctx, const Response& r, const std::function<void()>& text) {
+  return PrintResponse(ctx, r, [](const Response&) {}, [&](const Response&) { text(); });
+}
+
+std::string Lie(const std::string& tag) {
+  if (tag == "water_hazard") return "in the water (a yellow penalty area)";
+  if (tag == "lateral_water_hazard") return "in the water (a red penalty area)";
+  if (tag == "out_of_bounds") return "out of bounds";
+  if (tag == "green") return "on the green";
+  if (tag == "tee") return "on the tee";
+  if (tag == "first_cut") return "in the first cut";
+  if (tag == "cartpath") return "on the cart path";
+  return "in the " + tag;
+}
+
+std::string ToPar(int d) {
+  if (d == 0) return "level";
+  return absl::StrFormat("%+d", d);
+}
+
+// The round in plain words: the hole, whose turn, each ball, the scores.
+void PrintRound(const v1::RoundState& r) {
+  std::printf("%s, hole %u of %u-%u (par %u)", r.course().c_str(), r.hole(), r.first_hole(),
+              r.last_hole(), r.par());
+  if (!r.result().empty()) {
+    std::string who;
+    for (uint32_t w : r.winners()) {
+      if (!who.empty()) who += " and ";
+      who += r.players(w).name();
+    }
+    std::printf(": the round is %s; %s %s with %u\n", r.result().c_str(), who.c_str(),
+                r.winners_size() > 1 ? "tie" : "wins", r.players(r.winners(0)).total());
+  } else if (r.stroke_in_play()) {
+    std::printf(": a ball is moving\n");
+  } else if (r.has_decision()) {
+    const v1::RoundDecision& d = r.decision();
+    std::printf(": %s must decide (%s): %s\n", r.players(d.seat()).name().c_str(),
+                d.reason() == "penalty_area" ? "ball in a penalty area, Rule 17.1d"
+                                             : "ball declared unplayable, Rule 19",
+                absl::StrJoin(d.choices(), ", ").c_str());
+  } else if (r.to_play() >= 0) {
+    std::printf(": %s to play\n", r.players(r.to_play()).name().c_str());
+  } else {
+    std::printf("\n");
+  }
+  for (const v1::RoundPlayerState& p : r.players()) {
+    const v1::RoundBall& b = p.ball();
+    std::string ball;
+    if (b.holed()) {
+      ball = absl::StrFormat("holed in %u", p.strokes());
+    } else {
+      ball = absl::StrFormat("%u stroke%s, %.1f m (%.0f yd) from the pin, %s%s", p.strokes(),
+                             p.strokes() == 1 ? "" : "s", b.distance_to_pin_m(),
+                             b.distance_to_pin_m() / kMetresPerYard, Lie(b.lie()).c_str(),
+                             b.marked() ? " (marked)" : "");
+    }
+    std::printf("  seat %u %-12s %-60s total %u (%s)\n", p.seat(), p.name().c_str(), ball.c_str(),
+                p.total(), ToPar(p.to_par()).c_str());
+  }
+}
+
+std::optional<std::string> Need(const std::string& token, std::string_view what) {
+  if (token.empty()) return std::string(what) + " needs --token";
+  return std::nullopt;
+}
+
+int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (!args.empty()) return UsageError("round create takes flags only, got '" + args[0] + "'");
+  v1::CreateRoundRequest request;
+  if (FlagGiven("course")) request.set_course(absl::GetFlag(FLAGS_course));
+  if (const std::string holes = absl::GetFlag(FLAGS_holes); !holes.empty()) {
+    const std::vector<std::string> ab = absl::StrSplit(holes, '-');
+    int a = 0, b = 0;
+    if (ab.size() > 2 || !absl::SimpleAtoi(ab[0], &a) ||
+        !absl::SimpleAtoi(ab.size() == 2 ? ab[1] : ab[0], &b) || a < 1 || b < a) {
+      return UsageError("--holes must be A-B (or A), 1 <= A <= B, got '" + holes.substr(0, 20) + "'");
+    }
+    request.set_first_hole(static_cast<uint32_t>(a));
+    request.set_last_hole(static_cast<uint32_t>(b));
+  }
+  const std::vector<std::string> players = absl::GetFlag(FLAGS_players);
+  if (players.empty()) return UsageError("round create needs --players NAME,NAME");
+  const std::vector<std::string> tees = absl::GetFlag(FLAGS_tees);
+  if (!tees.empty() && tees.size() != players.size()) {
+    return UsageError(absl::StrFormat("--tees needs one tee per player (%d), got %d",
+                                      players.size(), tees.size()));
+  }
+  for (size_t i = 0; i < players.size(); ++i) {
+    v1::RoundPlayerSpec* p = request.add_players();
+    p->set_name(players[i]);
+    if (!tees.empty()) p->set_tee(tees[i]);
+  }
+  if (const std::string play = absl::GetFlag(FLAGS_play); play != "stroke") {
+    return UsageError(InvalidValue(
+        "--play: this server plays stroke play (gross); match play and Stableford are not "
+        "available yet, got '" + play.substr(0, 20) + "'"));
+  }
+  if (!absl::GetFlag(FLAGS_handicaps).empty()) {
+    return UsageError(InvalidValue("--handicaps: handicaps are not available yet (gross stroke play)"));
+  }
+  const std::string profile = absl::GetFlag(FLAGS_profile);
+  if (profile == "realistic") request.set_profile(v1::REALISM_PROFILE_REALISTIC);
+  else if (profile == "arcade") request.set_profile(v1::REALISM_PROFILE_ARCADE);
+  else if (!profile.empty()) return UsageError("--profile must be realistic or arcade, got '" + profile + "'");
+  request.set_noise(absl::GetFlag(FLAGS_noise));
+  request.set_seed(absl::GetFlag(FLAGS_seed));
+  for (const std::string& rule : RepeatedFlagValues("rule")) {
+    const size_t eq = rule.find('=');
+    if (eq == std::string::npos) return UsageError("--rule must be NAME=VALUE, got '" + rule.substr(0, 40) + "'");
+    (*request.mutable_rules())[rule.substr(0, eq)] = rule.substr(eq + 1);
+  }
+  request.set_tick_hz(FlagGiven("tick_hz") ? absl::GetFlag(FLAGS_tick_hz) : 0.0);
+  request.set_fast_forward(absl::GetFlag(FLAGS_fast_forward));
+  v1::CreateRoundResponse r;
+  const grpc::Status status = stub.CreateRound(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("round %s: %s holes %u-%u, %g Hz%s\n", r.round_id().c_str(),
+                r.round().course().c_str(), r.round().first_hole(), r.round().last_hole(),
+                r.tick_hz(), request.fast_forward() ? ", fast-forward" : "");
+    for (const v1::Seat& s : r.seats()) {
+      std::printf("  seat %u %-12s token %s\n", s.seat(), s.name().c_str(), s.token().c_str());
+    }
+    std::printf("  admin token %s\n", r.admin_token().c_str());
+    PrintRound(r.round());
+  });
+}
+
+int RunGet(const Context& ctx, Stub& stub, const std::vector<std::string>& args, bool scorecard) {
+  if (args.size() != 1) return UsageError(scorecard ? "round scorecard ID" : "round get ID");
+  v1::GetRoundRequest request;
+  request.set_round_id(args[0]);
+  v1::RoundInfo r;
+  const grpc::Status status = stub.GetRound(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  if (!scorecard) {
+    return Print(ctx, r, [&] {
+      std::printf("round %s, tick %lld at %g Hz, %u watchers\n", r.round_id().c_str(),
+                  static_cast<long long>(r.tick()), r.tick_hz(), r.watchers());
+      PrintRound(r.round());
+    });
+  }
+  // The scorecard: per player the holes' scores, the total and against par.
+  v1::RoundState card = r.round();
+  return Print(ctx, card, [&] {
+    std::printf("%-12s", "hole");
+    for (uint32_t h = card.first_hole(); h <= card.last_hole(); ++h) std::printf(" %3u", h);
+    std::printf("  total  par\n");
+    for (const v1::RoundPlayerState& p : card.players()) {
+      std::printf("%-12s", p.name().c_str());
+      for (uint32_t s : p.scores()) {
+        if (s == 0) std::printf("   -");
+        else std::printf(" %3u", s);
+      }
+      std::printf("  %5u  %s\n", p.total(), ToPar(p.to_par()).c_str());
+    }
+  });
+}
+
+int RunList(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (!args.empty()) return UsageError("round list takes flags only");
+  if (auto bad = CheckPageSize()) return UsageError(*bad);
+  v1::ListRoundsRequest request;
+  request.set_page_size(static_cast<uint32_t>(absl::GetFlag(FLAGS_page_size)));
+  request.set_page_token(absl::GetFlag(FLAGS_page_token));
+  v1::ListRoundsResponse r;
+  const grpc::Status status = stub.ListRounds(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("%u rounds\n", r.total());
+    for (const v1::RoundBrief& b : r.rounds()) {
+      std::printf("  %-16s %-16s hole %-3u %-10s %s\n", b.round_id().c_str(), b.course().c_str(),
+                  b.hole(), b.result().empty() ? "playing" : b.result().c_str(),
+                  absl::StrJoin(b.players(), ", ").c_str());
+    }
+    if (!r.next_page_token().empty()) std::printf("more: --page-token %s\n", r.next_page_token().c_str());
+  });
+}
+
+int RunDelete(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("round delete ID --token T");
+  v1::DeleteRoundRequest request;
+  request.set_round_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  if (auto bad = Need(request.token(), "round delete (the admin token)")) return UsageError(*bad);
+  v1::DeleteRoundResponse r;
+  const grpc::Status status = stub.DeleteRound(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] { std::printf("deleted %s\n", args[0].c_str()); });
+}
+
+int RunStroke(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("round stroke ID --token T (a launch or --putt-speed)");
+  v1::PlayStrokeRequest request;
+  request.set_round_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  if (auto bad = Need(request.token(), "round stroke (the seat's token)")) return UsageError(*bad);
+  const auto speed = absl::GetFlag(FLAGS_ball_speed);
+  const auto putt = absl::GetFlag(FLAGS_putt_speed);
+  if ((speed ? 1 : 0) + (putt ? 1 : 0) != 1) {
+    return UsageError("round stroke needs one stroke: a launch (--ball-speed --launch-deg "
+                      "--spin-rpm) or a putt (--putt-speed)");
+  }
+  if (speed) {
+    const auto launch = absl::GetFlag(FLAGS_launch_deg);
+    const auto spin = absl::GetFlag(FLAGS_spin_rpm);
+    if (!launch || !spin) return UsageError("a launch needs --ball-speed, --launch-deg and --spin-rpm");
+    v1::LaunchConditions* l = request.mutable_launch();
+    l->set_ball_speed_mps(*speed);
+    l->set_launch_angle_deg(*launch);
+    l->set_spin_rpm(*spin);
+    l->set_spin_axis_deg(absl::GetFlag(FLAGS_spin_axis_deg));
+    l->set_launch_direction_deg(absl::GetFlag(FLAGS_launch_direction_deg));
+    if (FlagGiven("putt_direction_deg")) return UsageError("--putt-direction-deg is a putt's; a launch takes --aim-deg");
+    if (auto a = absl::GetFlag(FLAGS_aim_deg)) request.set_aim_deg(*a);
+  } else {
+    request.set_putt_speed_mps(*putt);
+    if (FlagGiven("aim_deg")) return UsageError("a putt's heading is --putt-direction-deg (default toward the pin)");
+    if (FlagGiven("putt_direction_deg")) request.set_aim_deg(absl::GetFlag(FLAGS_putt_direction_deg));
+  }
+  // The flagstick stays in unless --flagstick=false.
+  request.set_flagstick_out(FlagGiven("flagstick") && !absl::GetFlag(FLAGS_flagstick));
+  v1::PlayStrokeResponse r;
+  const grpc::Status status = stub.PlayStroke(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("stroke %llu struck at tick %lld; the ball comes to rest at tick %lld\n",
+                static_cast<unsigned long long>(r.stroke()), static_cast<long long>(r.start_tick()),
+                static_cast<long long>(r.rest_tick()));
+  });
+}
+
+int RunDecide(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("round decide ID --token T --choice CHOICE");
+  v1::DecideRoundRequest request;
+  request.set_round_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  if (auto bad = Need(request.token(), "round decide (the seat's token)")) return UsageError(*bad);
+  request.set_choice(absl::GetFlag(FLAGS_choice));
+  if (request.choice().empty()) {
+    return UsageError("round decide needs --choice: one of the decision's choices, or unplayable");
+  }
+  if (auto b = absl::GetFlag(FLAGS_back_m)) request.set_back_m(*b);
+  v1::DecideRoundResponse r;
+  const grpc::Status status = stub.DecideRound(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] { PrintRound(r.round()); });
+}
+
+int RunRecord(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("round record ID");
+  v1::GetRoundRecordRequest request;
+  request.set_round_id(args[0]);
+  v1::RoundRecord r;
+  const grpc::Status status = stub.GetRoundRecord(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("round %s on %s: %d commands\n", r.round_id().c_str(), r.round().course().c_str(),
+                r.commands_size());
+    for (const v1::RoundCommand& c : r.commands()) {
+      const std::string who = c.seat() >= 0 && c.seat() < r.round().players_size()
+                                  ? r.round().players(c.seat()).name()
+                                  : "admin";
+      if (c.has_stroke()) {
+        const v1::PlayStrokeRequest& s = c.stroke();
+        if (s.has_launch()) {
+          std::printf("  tick %-8lld %-12s launch %.2f m/s, %.1f deg up, %.0f rpm%s\n",
+                      static_cast<long long>(c.tick()), who.c_str(), s.launch().ball_speed_mps(),
+                      s.launch().launch_angle_deg(), s.launch().spin_rpm(),
+                      s.has_aim_deg() ? absl::StrFormat(", aim %.2f deg", s.aim_deg()).c_str() : "");
+        } else {
+          std::printf("  tick %-8lld %-12s putt %.3f m/s%s\n", static_cast<long long>(c.tick()),
+                      who.c_str(), s.putt_speed_mps(),
+                      s.has_aim_deg() ? absl::StrFormat(", heading %.2f deg", s.aim_deg()).c_str() : "");
+        }
+      } else if (c.has_decide()) {
+        std::printf("  tick %-8lld %-12s decides %s\n", static_cast<long long>(c.tick()), who.c_str(),
+                    c.decide().choice().c_str());
+      }
+    }
+    PrintRound(r.round());
+  });
+}
+
+// One line per snapshot with events or a state change; the ball's position while it moves.
+int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("round watch ID [--rate HZ] [--until-rest] [--from-sequence N]");
+  v1::WatchRoundRequest request;
+  request.set_round_id(args[0]);
+  if (auto v = absl::GetFlag(FLAGS_rate)) request.set_rate_hz(*v);
+  if (auto v = absl::GetFlag(FLAGS_from_sequence)) request.set_from_sequence(*v);
+  const bool until_rest = absl::GetFlag(FLAGS_until_rest);
+  auto call = ctx.NewCall();
+  std::unique_ptr<grpc::ClientReader<v1::RoundSnapshot>> reader = stub.WatchRound(call.get(), request);
+  JsonArrayStream array(ctx.format == Format::kJson);
+  v1::RoundSnapshot s;
+  bool moving_seen = false;
+  while (reader->Read(&s)) {
+    if (ctx.format == Format::kJson) {
+      array.Add(ToJson(s, true));
+    } else if (ctx.format == Format::kJsonl) {
+      std::cout << ToJson(s, true) << "\n" << std::flush;
+    } else {
+      for (const v1::RoundEvent& e : s.events()) {
+        std::string who = e.seat() >= 0 && s.has_round() && e.seat() < s.round().players_size()
+                              ? s.round().players(e.seat()).name() + ": "
+                              : "";
+        std::printf("tick %-8lld %s%s at (%.2f, %.2f)%s%s%s\n", static_cast<long long>(e.tick()),
+                    who.c_str(), e.kind().c_str(), e.x_m(), e.y_m(),
+                    e.lie().empty() ? "" : (" " + e.lie()).c_str(),
+                    e.rule().empty() ? "" : (" (Rule " + e.rule() + ")").c_str(),
+                    e.choices().empty() ? "" : (": " + absl::StrJoin(e.choices(), ", ")).c_str());
+      }
+      std::fflush(stdout);
+    }
+    if (s.has_ball()) moving_seen = true;
+    if (until_rest && moving_seen && s.has_round() && !s.round().stroke_in_play()) break;
+  }
+  if (until_rest && moving_seen) {
+    call->TryCancel();
+    return 0;
+  }
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) return ReportRpcError(status);
+  return 0;
+}
+
+}  // namespace
+
+int RunRound(const Context& ctx, const std::vector<std::string>& args) {
+  static constexpr const char* kVerbs =
+      "create, list, get, delete, stroke, decide, watch, scorecard, record";
+  if (args.empty()) return UsageError(std::string("round needs a subcommand: ") + kVerbs);
+  const std::string& verb = args[0];
+  if (ctx.format == Format::kCsv) return UsageError("round " + verb + " has no csv form (json or text)");
+  const std::vector<std::string> rest(args.begin() + 1, args.end());
+  std::unique_ptr<Stub> stub = v1::Swing::NewStub(ctx.channel);
+  if (verb == "create") return RunCreate(ctx, *stub, rest);
+  if (verb == "list") return RunList(ctx, *stub, rest);
+  if (verb == "get") return RunGet(ctx, *stub, rest, false);
+  if (verb == "scorecard") return RunGet(ctx, *stub, rest, true);
+  if (verb == "delete") return RunDelete(ctx, *stub, rest);
+  if (verb == "stroke") return RunStroke(ctx, *stub, rest);
+  if (verb == "decide") return RunDecide(ctx, *stub, rest);
+  if (verb == "watch") return RunWatch(ctx, *stub, rest);
+  if (verb == "record") return RunRecord(ctx, *stub, rest);
+  return UsageError("unknown round subcommand '" + verb + "' (" + kVerbs + ")");
+}
+
+}  // namespace sportsim::cli
