@@ -76,12 +76,14 @@ Commands:
       length), its surfaces' constants; --svg draws it from above (surfaces, elevation)
   round create --players NAME,NAME [--course NAME] [--holes A-B] [--tees NAME,NAME]
       [--profile realistic|arcade] [--noise X] [--seed N] [--rule order=honour|ready]
-      [--tick-hz HZ] [--fast-forward]   a round of golf (stroke play, the Rules of Golf);
+      [--tick-hz HZ] [--fast-forward] [--shot-clock S]   a round of golf (stroke play);
       prints the seat tokens and the admin token
   round list | round get ID | round scorecard ID | round record ID | round delete ID --token T
   round stroke ID --token T (--ball-speed MPS --launch-deg DEG --spin-rpm RPM
       [--spin-axis-deg DEG] [--launch-direction-deg DEG] [--aim-deg DEG] | --putt-speed MPS
-      [--putt-direction-deg DEG]) [--flagstick=false]   the seat's ball, where it lies
+      [--putt-direction-deg DEG] | --club NAME [torque and golfer flags of swing simulate]
+      [--face-angle-deg DEG] [--club-path-deg DEG] [--dynamic-loft-deg DEG] [--aim-deg DEG])
+      [--flagstick=false]   the seat's ball, where it lies
   round decide ID --token T --choice CHOICE [--back-m M]   relief (or unplayable)
   round watch ID [--rate HZ] [--until-rest] [--from-sequence N]   the round's events
   shot simulate [flags]     fast-forward one cue shot until every ball is at rest:

@@ -19,6 +19,8 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "client/cli.h"
+#include "client/command_flags.h"
+#include "client/swing_flags.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
 // Shared with golf simulate (golf_commands.cc), flight simulate, the table and swing commands.
@@ -43,6 +45,11 @@ ABSL_DECLARE_FLAG(std::string, page_token);
 ABSL_DECLARE_FLAG(std::string, profile);
 ABSL_DECLARE_FLAG(double, noise);
 ABSL_DECLARE_FLAG(uint64_t, seed);
+ABSL_DECLARE_FLAG(std::optional<double>, shot_clock);
+ABSL_DECLARE_FLAG(std::string, club);
+ABSL_DECLARE_FLAG(std::optional<double>, dynamic_loft_deg);
+ABSL_DECLARE_FLAG(double, face_angle_deg);
+ABSL_DECLARE_FLAG(double, club_path_deg);
 
 ABSL_FLAG(std::string, holes, "", "round create: the holes played, A-B (default all)");
 ABSL_FLAG(std::vector<std::string>, players, {}, "round create: the players' names, in seat order");
@@ -173,6 +180,7 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   }
   request.set_tick_hz(FlagGiven("tick_hz") ? absl::GetFlag(FLAGS_tick_hz) : 0.0);
   request.set_fast_forward(absl::GetFlag(FLAGS_fast_forward));
+  if (auto c = absl::GetFlag(FLAGS_shot_clock)) request.set_shot_clock_s(*c);
   v1::CreateRoundResponse r;
   const grpc::Status status = stub.CreateRound(ctx.NewCall().get(), request, &r);
   if (!status.ok()) return ReportRpcError(status);
@@ -259,11 +267,32 @@ int RunStroke(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   if (auto bad = Need(request.token(), "round stroke (the seat's token)")) return UsageError(*bad);
   const auto speed = absl::GetFlag(FLAGS_ball_speed);
   const auto putt = absl::GetFlag(FLAGS_putt_speed);
-  if ((speed ? 1 : 0) + (putt ? 1 : 0) != 1) {
+  const std::string club = absl::GetFlag(FLAGS_club);
+  if ((speed ? 1 : 0) + (putt ? 1 : 0) + (club.empty() ? 0 : 1) != 1) {
     return UsageError("round stroke needs one stroke: a launch (--ball-speed --launch-deg "
-                      "--spin-rpm) or a putt (--putt-speed)");
+                      "--spin-rpm), a putt (--putt-speed) or a swing (--club NAME)");
   }
-  if (speed) {
+  if (club.empty()) {
+    for (const char* f : {"qalpha", "qbeta", "qbeta_until", "dynamic_loft_deg", "face_angle_deg",
+                          "club_path_deg", "gamma", "beta0", "arm_length", "club_length",
+                          "arm_inertia", "arm_first_moment", "club_inertia", "club_mass",
+                          "club_first_moment", "gravity", "shoulder_accel"}) {
+      if (FlagGiven(f)) return UsageError(Dashed(f) + " describes a swing: give --club too");
+    }
+  }
+  if (!club.empty()) {
+    v1::RoundSwing* w = request.mutable_swing();
+    w->set_club(club);
+    if (auto v = absl::GetFlag(FLAGS_dynamic_loft_deg)) w->set_dynamic_loft_deg(*v);
+    w->set_face_angle_deg(absl::GetFlag(FLAGS_face_angle_deg));
+    w->set_club_path_deg(absl::GetFlag(FLAGS_club_path_deg));
+    v1::TorqueProgram torques;
+    if (auto bad = BuildTorqueProgram(&torques)) return UsageError(*bad);
+    if (torques.has_qalpha() || torques.has_qbeta()) *w->mutable_torques() = torques;
+    if (auto bad = BuildSwingParameters(w->mutable_parameters())) return UsageError(*bad);
+    if (FlagGiven("putt_direction_deg")) return UsageError("--putt-direction-deg is a putt's; a swing takes --aim-deg");
+    if (auto a = absl::GetFlag(FLAGS_aim_deg)) request.set_aim_deg(*a);
+  } else if (speed) {
     const auto launch = absl::GetFlag(FLAGS_launch_deg);
     const auto spin = absl::GetFlag(FLAGS_spin_rpm);
     if (!launch || !spin) return UsageError("a launch needs --ball-speed, --launch-deg and --spin-rpm");
@@ -338,6 +367,9 @@ int RunRecord(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
       } else if (c.has_decide()) {
         std::printf("  tick %-8lld %-12s decides %s\n", static_cast<long long>(c.tick()), who.c_str(),
                     c.decide().choice().c_str());
+      } else if (c.shot_clock()) {
+        std::printf("  tick %-8lld %-12s the shot clock ran out: a penalty stroke\n",
+                    static_cast<long long>(c.tick()), who.c_str());
       }
     }
     PrintRound(r.round());

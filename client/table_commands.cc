@@ -662,6 +662,7 @@ std::optional<std::string> CheckGameFlags(std::string_view command, std::string_
   const bool round = command == "round";
   for (const Use& u : kUses) {
     if (round && std::string_view(u.flag) == "choice" && sub == "decide") continue;
+    if (round && std::string_view(u.flag) == "shot_clock" && sub == "create") continue;
     if (Given(u.flag) && !(table && sub == u.verb)) {
       return absl::StrCat(u.shown, " applies to table ", u.verb, " only");
     }

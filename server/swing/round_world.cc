@@ -11,6 +11,7 @@
 #include "server/world/watcher_impl.h"
 #include "server/world/world.h"
 #include "sim/core/check.h"
+#include "server/swing/convert.h"
 #include "sportsim/store/v1/journal.pb.h"
 
 namespace sportsim::server {
@@ -96,6 +97,15 @@ v1::RoundMovingBall BallAt(const PlayedStroke& p, double t) {
   b.set_z_m(at.z());
   b.set_speed_mps(speed);
   return b;
+}
+
+// The shot clock starts again at tick `from` (none when the round has none or is over).
+void RestartClock(Round& r, int64_t from) ABSL_EXCLUSIVE_LOCKS_REQUIRED(r.mu) {
+  if (r.shot_clock_s <= 0.0 || r.state.over) {
+    r.clock_deadline.reset();
+    return;
+  }
+  r.clock_deadline = from + std::max<int64_t>(1, std::llround(r.shot_clock_s * r.tick_hz));
 }
 
 void Refresh(Round& r) ABSL_EXCLUSIVE_LOCKS_REQUIRED(r.mu) {
@@ -232,8 +242,36 @@ absl::StatusOr<golf::RoundStroke> RoundStrokeFromProto(const v1::PlayStrokeReque
             "putt_speed_mps: must be in (0, 15] m/s; got %g", k.speed_mps));
       }
       break;
+    case v1::PlayStrokeRequest::kSwing: {
+      const v1::RoundSwing& w = r.swing();
+      k.kind = golf::RoundStroke::Kind::kSwing;
+      golf::SwingStroke sw;
+      const std::string club = w.club().empty() ? "driver" : w.club();
+      if (absl::Status s = CheckId("swing.club", club); !s.ok()) return s;
+      absl::StatusOr<golf::ClubSpec> spec = golf::ClubPreset(club);
+      if (!spec.ok()) return PrefixStatus("swing.club: ", spec.status());
+      sw.club = *spec;
+      absl::StatusOr<swing::SwingModel> model =
+          SwingModelFromProto(w.parameters(), google::protobuf::RepeatedField<int>());
+      if (!model.ok()) return PrefixStatus("swing.", model.status());
+      sw.model = std::make_shared<const swing::SwingModel>(*std::move(model));
+      absl::StatusOr<swing::TorqueProgram> program = TorqueProgramFromProto(w.torques(), w.has_torques());
+      if (!program.ok()) return PrefixStatus("swing.", program.status());
+      sw.program = *std::move(program);
+      if (w.has_dynamic_loft_deg()) sw.delivery.dynamic_loft_deg = w.dynamic_loft_deg();
+      sw.delivery.face_angle_deg = w.face_angle_deg();
+      sw.delivery.club_path_deg = w.club_path_deg();
+      // The delivery's own limits, with a placeholder speed and a level attack.
+      golf::ClubDelivery probe = sw.delivery;
+      probe.clubhead_speed_mps = 40.0;
+      if (absl::StatusOr<golf::ImpactResult> i = golf::SimulateImpact(probe, sw.club, {}); !i.ok()) {
+        return PrefixStatus("swing.", i.status());
+      }
+      k.swing = std::move(sw);
+      break;
+    }
     default:
-      return absl::InvalidArgumentError("stroke: one of launch or putt is required");
+      return absl::InvalidArgumentError("stroke: one of launch, putt_speed_mps or swing is required");
   }
   return k;
 }
@@ -242,13 +280,16 @@ absl::StatusOr<golf::RoundStroke> RoundStrokeFromProto(const v1::PlayStrokeReque
 // Watcher
 
 void RoundWatch::Fill(const RoundWatchOptions& /*options*/, const std::string& round_id,
-                      const RoundFrame& frame, const RoundFrame* /*last_sent*/, bool /*full*/,
+                      const RoundFrame& frame, const RoundFrame* last_sent, bool full,
                       v1::RoundSnapshot* out) {
   out->set_round_id(round_id);
   out->set_tick(frame.tick);
   out->set_heartbeat(frame.heartbeat);
   if (frame.heartbeat) return;
-  if (frame.round != nullptr) *out->mutable_round() = *frame.round;
+  // The state only when it changed since this reader's last snapshot (each change makes a new
+  // one): frames of a moving ball carry the ball alone.
+  const bool changed = full || last_sent == nullptr || last_sent->round != frame.round;
+  if (frame.round != nullptr && changed) *out->mutable_round() = *frame.round;
   if (frame.ball) *out->mutable_ball() = *frame.ball;
 }
 
@@ -301,6 +342,27 @@ void RoundKind::EndRun(RoundHost& host, Round& r, const End& /*end*/,
   r.next_ball_event = 0;
   host.RunEnded();
   Refresh(r);
+  RestartClock(r, r.tick);
+}
+
+std::optional<int64_t> RoundKind::RestDeadline(const Round& r) ABSL_NO_THREAD_SAFETY_ANALYSIS {
+  if (r.stroke) return std::nullopt;
+  return r.clock_deadline;
+}
+
+void RoundKind::AtRestDeadline(RoundHost& /*host*/, Round& r, std::vector<RoundEventPtr>* fresh)
+    ABSL_NO_THREAD_SAFETY_ANALYSIS {
+  absl::StatusOr<golf::RoundStep> step = golf::ShotClockExpired(*r.course, r.settings, r.state);
+  if (step.ok()) {
+    r.state = std::move(step->state);
+    for (const golf::RoundEvent& g : step->events) fresh->push_back(r.Log(RefereeEventToProto(g, r.tick)));
+    v1::RoundCommand& c = r.commands.emplace_back();
+    c.set_tick(r.tick);
+    c.set_seat(step->events.empty() ? -1 : step->events.front().seat);
+    c.set_shot_clock(true);
+    Refresh(r);
+  }
+  RestartClock(r, r.tick);
 }
 
 std::shared_ptr<const RoundFrame> RoundKind::MakeFrame(const Round& r, int64_t k, bool heartbeat,
@@ -335,6 +397,10 @@ absl::StatusOr<v1::CreateRoundResponse> RoundRegistry::MakeRound(
   if (absl::Status s = CheckFiniteInRange("tick_hz", tick_hz, 1, false, 240, false); !s.ok()) {
     return s;
   }
+  if (absl::Status s = CheckFiniteInRange("shot_clock_s", request.shot_clock_s(), 0, false, 3600, false);
+      !s.ok()) {
+    return s;
+  }
   const std::string name = request.course().empty() ? kDefaultCourse : request.course();
   absl::StatusOr<std::shared_ptr<const golf::Course>> course = golf::BuiltinCourse(name);
   if (!course.ok()) return PrefixStatus("course: ", course.status());
@@ -353,6 +419,7 @@ absl::StatusOr<v1::CreateRoundResponse> RoundRegistry::MakeRound(
   made.settings = *settings;
   made.setup = request;
   made.fast_forward = request.fast_forward();
+  made.shot_clock_s = request.shot_clock_s();
   made.tick_hz = tick_hz;
   made.period_s = 1.0 / tick_hz;
   v1::CreateRoundResponse response;
@@ -362,6 +429,7 @@ absl::StatusOr<v1::CreateRoundResponse> RoundRegistry::MakeRound(
     made.clock.origin = SteadyClock::now();
     made.state = *std::move(state);
     Refresh(made);
+    RestartClock(made, 0);
     *response.mutable_round() = *made.state_proto;
   }
   response.set_tick_hz(tick_hz);
@@ -382,6 +450,10 @@ absl::StatusOr<v1::CreateRoundResponse> RoundRegistry::Create(const v1::CreateRo
   if (absl::Status s = host_.Add(round, created.SerializeAsString()); !s.ok()) return s;
   response.set_round_id(round->id);
   response.set_admin_token(admin);
+  if (round->shot_clock_s > 0) {  // a clock that runs while nobody plays needs a wake
+    absl::MutexLock lock(&round->mu);
+    host_.ScheduleRest(*round);
+  }
   return response;
 }
 
@@ -401,6 +473,8 @@ absl::StatusOr<v1::RoundInfo> RoundRegistry::Get(const v1::GetRoundRequest& requ
   info.set_noise(r.settings.noise);
   info.set_seed(r.settings.seed);
   info.set_fast_forward(r.fast_forward);
+  info.set_shot_clock_s(r.shot_clock_s);
+  info.set_clock_deadline_tick(r.clock_deadline && !r.stroke ? *r.clock_deadline : 0);
   return info;
 }
 
@@ -612,6 +686,8 @@ absl::StatusOr<v1::DecideRoundResponse> RoundRegistry::DecideOn(Round& r, int se
   for (const golf::RoundEvent& g : step->events) fresh.push_back(r.Log(RefereeEventToProto(g, tick)));
   host_.CountEvents(fresh.size());
   Refresh(r);
+  RestartClock(r, tick);
+  if (r.clock_deadline) host_.ScheduleRest(r);
   r.OfferFrameAt(tick, fresh, &pump);
   v1::DecideRoundResponse response;
   response.set_sequence(r.sequence);

@@ -94,7 +94,9 @@ struct RoundKind {
     golf::RoundSettings settings;
     v1::CreateRoundRequest setup;  ///< as asked, for the record
     bool fast_forward = false;
+    double shot_clock_s = 0.0;  ///< 0: none
     // Guarded by mu.
+    std::optional<int64_t> clock_deadline;  ///< the shot clock's tick, at rest
     golf::RoundState state;
     uint64_t version = 0;  ///< bumped by every change of `state`
     std::shared_ptr<const v1::RoundState> state_proto;
@@ -118,9 +120,11 @@ struct RoundKind {
                      std::vector<std::shared_ptr<const v1::RoundEvent>>* fresh, Round::Pump* pump);
   static std::shared_ptr<const RoundFrame> MakeFrame(const Round& r, int64_t k, bool heartbeat,
                                                      SteadyClock::time_point published);
-  static std::optional<int64_t> RestDeadline(const Round&) { return std::nullopt; }
-  static void AtRestDeadline(RoundHost&, Round&,
-                             std::vector<std::shared_ptr<const v1::RoundEvent>>*) {}
+  /// The shot clock's deadline while the round is at rest and not over.
+  static std::optional<int64_t> RestDeadline(const Round& r);
+  /// The shot clock ran out: a penalty stroke for the seat to play, and it restarts.
+  static void AtRestDeadline(RoundHost& host, Round& r,
+                             std::vector<std::shared_ptr<const v1::RoundEvent>>* fresh);
   static uint64_t Runs(const Round& r);
   static std::string Checkpoint(const Round&) { return {}; }  // never taken (RoundLimits)
 };

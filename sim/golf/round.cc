@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 #include <utility>
 
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
 #include "sim/golf/ground.h"
+#include "sim/swing/realism.h"
 
 namespace sportsim::golf {
 namespace {
@@ -652,6 +654,27 @@ absl::Status CheckStroke(const Course& course, const RoundSettings& settings,
   if (stroke.aim_deg && !(std::abs(*stroke.aim_deg) <= 1e4)) {
     return absl::InvalidArgumentError("aim_deg: must be a finite heading (deg)");
   }
+  if (stroke.kind == RoundStroke::Kind::kSwing) {
+    if (!stroke.swing || stroke.swing->model == nullptr) {
+      return absl::InvalidArgumentError("swing: a swing stroke needs its golfer, torques and club");
+    }
+    if (settings.realism == Realism::kRealistic) {
+      const swing::TorqueProgram& p = stroke.swing->program;
+      for (const auto& [name, schedule, limit] :
+           {std::tuple{"qalpha", &p.q_alpha(), swing::kHumanLimits.max_shoulder_torque_nm},
+            std::tuple{"qbeta", &p.q_beta(), swing::kHumanLimits.max_wrist_torque_nm}}) {
+        for (size_t i = 0; i < schedule->knots.size(); ++i) {
+          if (absl::Status s = swing::CheckHumanTorque(
+                  absl::StrFormat("swing.torques.%s.knots[%d].torque_nm", name, i),
+                  schedule->knots[i].torque_nm, limit);
+              !s.ok()) {
+            return s;
+          }
+        }
+      }
+    }
+    return absl::OkStatus();
+  }
   if (stroke.kind == RoundStroke::Kind::kPutt) {
     if (!(stroke.speed_mps > 0.0 && stroke.speed_mps <= 15.0)) {
       return absl::InvalidArgumentError(
@@ -666,7 +689,8 @@ absl::Status CheckStroke(const Course& course, const RoundSettings& settings,
 
 absl::StatusOr<CourseShot> StrokeShot(const Course& course, const RoundSettings& settings,
                                       const RoundState& state, int seat,
-                                      const RoundStroke& stroke) {
+                                      const RoundStroke& stroke,
+                                      const std::function<bool()>& cancelled) {
   if (seat < 0 || seat >= static_cast<int>(state.players.size())) {
     return absl::InvalidArgumentError(absl::StrFormat("seat: %d is not a seat of the round", seat));
   }
@@ -689,6 +713,21 @@ absl::StatusOr<CourseShot> StrokeShot(const Course& course, const RoundSettings&
   } else {
     shot.kind = CourseShot::Kind::kLaunch;
     LaunchConditions c = stroke.launch;
+    if (stroke.kind == RoundStroke::Kind::kSwing) {
+      if (!stroke.swing || stroke.swing->model == nullptr) {
+        return absl::InvalidArgumentError("swing: a swing stroke needs its golfer, torques and club");
+      }
+      absl::StatusOr<SwingLaunch> swung = LaunchFromSwing(*stroke.swing, settings.ball, cancelled);
+      if (!swung.ok()) return swung.status();
+      if (settings.realism == Realism::kRealistic &&
+          swung->clubhead_speed_mps > swing::kHumanLimits.max_clubhead_speed_mps) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "torques: this swing brings the clubhead to %.1f m/s at impact, beyond what a human "
+            "golfer reaches (realistic profile: %g m/s); the arcade profile lifts the bound",
+            swung->clubhead_speed_mps, swing::kHumanLimits.max_clubhead_speed_mps));
+      }
+      c = swung->launch;
+    }
     c.ball_speed_mps = std::clamp(c.ball_speed_mps * (1.0 + 0.015 * k * normal(0)), 0.1, 120.0);
     c.launch_angle_deg = std::clamp(c.launch_angle_deg + 1.0 * k * normal(1), -90.0, 90.0);
     c.launch_direction_deg = std::clamp(c.launch_direction_deg + 1.5 * k * normal(2), -90.0, 90.0);
@@ -757,12 +796,22 @@ absl::StatusOr<RoundStep> JudgeStroke(const Course& course, const RoundSettings&
   return ref.Take();
 }
 
+absl::StatusOr<RoundStep> ShotClockExpired(const Course& course, const RoundSettings& settings,
+                                           const RoundState& state) {
+  const int seat = ToPlay(course, settings, state);
+  if (seat < 0) return absl::FailedPreconditionError("the round is over");
+  static const std::function<bool()> kNever;
+  Referee ref(course, settings, state, kNever);
+  ref.Penalty(seat, 1, "shot_clock", "5.6b");
+  return ref.Take();
+}
+
 absl::StatusOr<RoundStep> PlayStroke(const Course& course, const RoundSettings& settings,
                                      const RoundState& state, int seat, const RoundStroke& stroke,
                                      CourseShotResult* shot_out,
                                      const std::function<bool()>& cancelled) {
   if (absl::Status s = CheckStroke(course, settings, state, seat, stroke); !s.ok()) return s;
-  absl::StatusOr<CourseShot> shot = StrokeShot(course, settings, state, seat, stroke);
+  absl::StatusOr<CourseShot> shot = StrokeShot(course, settings, state, seat, stroke, cancelled);
   if (!shot.ok()) return shot.status();
   shot->flight.cancelled = cancelled;
   shot->ground.cancelled = cancelled;

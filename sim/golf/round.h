@@ -31,6 +31,7 @@
 #include "absl/status/statusor.h"
 #include "sim/golf/course.h"
 #include "sim/golf/course_shot.h"
+#include "sim/golf/swing_stroke.h"
 
 namespace sportsim::golf {
 
@@ -188,13 +189,15 @@ struct RoundStep {
   std::vector<RoundEvent> events;
 };
 
-/// A player's stroke: a launch (ball speed, angles, spin) or a putt, toward `aim_deg` (the pin
-/// when unset). The ball is played where it lies: a stroke has no position.
+/// A player's stroke: a launch (ball speed, angles, spin), a putt, or a swing (a golfer's torque
+/// program and a club: swing_stroke.h), toward `aim_deg` (the pin when unset). The ball is
+/// played where it lies: a stroke has no position.
 struct RoundStroke {
-  enum class Kind : uint8_t { kLaunch, kPutt };
+  enum class Kind : uint8_t { kLaunch, kPutt, kSwing };
   Kind kind = Kind::kLaunch;
   LaunchConditions launch;  ///< kLaunch (its direction and spin axis relative to the aim)
   double speed_mps = 0.0;   ///< kPutt
+  std::optional<SwingStroke> swing;  ///< kSwing
   std::optional<double> aim_deg;
   bool flagstick_in = true;  ///< Rule 13.2: the player's choice, in or out
 };
@@ -225,10 +228,12 @@ std::vector<int> MayPlay(const Course& course, const RoundSettings& settings,
 absl::Status CheckStroke(const Course& course, const RoundSettings& settings,
                          const RoundState& state, int seat, const RoundStroke& stroke);
 /// The shot the stroke gives: from the seat's ball, at its hole, the round's noise drawn from
-/// the seed (the round's stroke count picks the draws).
+/// the seed (the round's stroke count picks the draws). A swing is run to impact first (under
+/// the realistic profile, a clubhead beyond a human's 70 m/s is refused naming "torques").
 absl::StatusOr<CourseShot> StrokeShot(const Course& course, const RoundSettings& settings,
                                       const RoundState& state, int seat,
-                                      const RoundStroke& stroke);
+                                      const RoundStroke& stroke,
+                                      const std::function<bool()>& cancelled = {});
 /// Rules on the stroke's result: the stroke counts; holed, at rest, out of bounds (stroke and
 /// distance, 18.2b: the ball back where the stroke was made, per 14.6), or in a penalty area
 /// (a decision with its choices, 17.1d); the marks on the green; the hole's and the round's
@@ -253,6 +258,12 @@ absl::StatusOr<RoundStep> PlayStroke(const Course& course, const RoundSettings& 
 absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& settings,
                                  const RoundState& state, int seat, const RoundChoice& choice,
                                  const std::function<bool()>& cancelled = {});
+
+/// The shot clock ran out on the seat to play (the seat with a pending decision, else ToPlay's):
+/// one penalty stroke under the round's pace-of-play policy (Rule 5.6b(3) lets the Committee
+/// set one; "shot_clock", rule "5.6b"). FailedPrecondition when the round is over.
+absl::StatusOr<RoundStep> ShotClockExpired(const Course& course, const RoundSettings& settings,
+                                           const RoundState& state);
 
 /// The area of the course (Rule 2.2) of a lie at a spot, for the hole being played: tees and
 /// greens of other holes are general area.

@@ -251,7 +251,8 @@ def wait_round_at_rest(server, round_id, timeout=60):
 def round_command(state):
     """A scripted player's next command from the round's state, the same on any server holding
     the same state: a pending decision's last choice; else, for the seat to play, a putt on or
-    near the green, otherwise a launch toward the pin sized by the distance."""
+    near the green, otherwise a launch toward the pin sized by the distance (high under 60 m, a
+    tenth shorter for each stroke over par on the hole)."""
     if state.HasField("decision") and state.decision.choices:
         return state.decision.seat, "decide", state.decision.choices[-1]
     seat = state.to_play
@@ -259,7 +260,10 @@ def round_command(state):
     d = ball.distance_to_pin_m
     if ball.lie == "green" or d < 20:
         return seat, "putt", min(12.0, 1.4 * (1.2 * (d + 0.3)) ** 0.5)
-    return seat, "launch", min(70.0, 4.5 * d ** 0.5)
+    f = 0.9 ** max(0, state.players[seat].strokes - state.par)
+    if d < 60:
+        return seat, "pitch", 3.6 * d ** 0.5 * f
+    return seat, "launch", min(70.0, 4.5 * d ** 0.5) * f
 
 
 def play_round_command(server, round_id, tokens):
@@ -273,10 +277,11 @@ def play_round_command(server, round_id, tokens):
         server.swings.PlayStroke(sp.PlayStrokeRequest(round_id=round_id, token=tokens[seat],
                                                       putt_speed_mps=value), timeout=30)
     else:
+        high = kind == "pitch"
         server.swings.PlayStroke(sp.PlayStrokeRequest(
             round_id=round_id, token=tokens[seat],
-            launch=sp.LaunchConditions(ball_speed_mps=value, launch_angle_deg=20,
-                                       spin_rpm=5000)), timeout=30)
+            launch=sp.LaunchConditions(ball_speed_mps=value, launch_angle_deg=40 if high else 20,
+                                       spin_rpm=6000 if high else 5000)), timeout=30)
     return seat, kind, value
 
 
@@ -408,26 +413,27 @@ class DurabilityBase:
             s.stop()
 
     def test_round_survives_kill9(self):
-        # Two players on the three holes, strokes taking table time (no fast-forward), the
-        # server killed twice while a ball moves. The reference: the same commands uninterrupted
-        # in memory. Commands follow from the round's state, so equal states mean equal rounds.
+        # A whole round, two players on the three holes, strokes taking round time (no
+        # fast-forward; the clock at 10x), the server killed twice while a ball moves. The
+        # reference: the same round uninterrupted in memory. Commands follow from the round's
+        # state, so equal states mean equal rounds.
         create = sp.CreateRoundRequest(course="sportsim_links",
                                        players=[sp.RoundPlayerSpec(name="Ann"),
                                                 sp.RoundPlayerSpec(name="Bob", tee="red")],
                                        seed=5, noise=0.5, tick_hz=30)
-        commands = 14
-
         def play(server, kills=()):
             created = server.swings.CreateRound(create, timeout=30)
             rid, tokens = created.round_id, [seat.token for seat in created.seats]
             played = []
-            for i in range(commands):
+            for i in range(120):
+                if wait_round_at_rest(server, rid).round.result:
+                    break
                 played.append(play_round_command(server, rid, tokens))
                 if i in kills:
-                    time.sleep(0.3)
+                    time.sleep(0.1)
                     moving = server.swings.GetRound(sp.GetRoundRequest(round_id=rid), timeout=10)
                     server.kill9()
-                    server = self.start("--clock_rate", "2")
+                    server = self.start("--clock_rate", "10")
                     info = server.swings.GetRound(sp.GetRoundRequest(round_id=rid), timeout=10)
                     self.assertEqual(info.round.strokes, moving.round.strokes)
                     self.assertGreaterEqual(info.tick, moving.tick)
@@ -436,14 +442,15 @@ class DurabilityBase:
                                                   timeout=10)
             return server, played, end, record, tokens
 
-        ref = Server([], "--clock_rate", "2")
+        ref = Server([], "--clock_rate", "10")
         try:
             _, ref_played, ref_end, ref_record, _ = play(ref)
         finally:
             ref.stop()
-        self.assertGreater(ref_end.round.strokes, 8)
+        self.assertEqual(ref_end.round.result, "finished")
+        self.assertGreater(ref_end.round.strokes, 12)
 
-        s = self.start("--clock_rate", "2")
+        s = self.start("--clock_rate", "10")
         s, played, end, record, tokens = play(s, kills=(3, 9))
         try:
             self.assertEqual(played, ref_played)
@@ -456,7 +463,9 @@ class DurabilityBase:
                 s.swings.PlayStroke(sp.PlayStrokeRequest(round_id=end.round_id, token="x" * 32,
                                                          putt_speed_mps=1), timeout=10)
             self.assertEqual(e.exception.code(), grpc.StatusCode.PERMISSION_DENIED)
-            play_round_command(s, end.round_id, tokens)
+            with self.assertRaises(grpc.RpcError) as e:  # the round is over
+                play_round_command(s, end.round_id, tokens)
+            self.assertEqual(e.exception.code(), grpc.StatusCode.FAILED_PRECONDITION)
         finally:
             s.stop()
 

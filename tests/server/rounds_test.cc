@@ -274,9 +274,9 @@ TEST_F(RoundsTest, AWholeRoundMatchesTheOfflineRefereeAndItsRecordReplays) {
   golf::RoundState replay = *golf::StartRound(c, *RoundSettingsFromProto(record->setup(), c));
   for (const v1::RoundCommand& cmd : record->commands()) {
     absl::StatusOr<golf::RoundStep> step =
-        cmd.has_stroke() ? golf::PlayStroke(c, s, replay, cmd.seat(), *RoundStrokeFromProto(cmd.stroke()))
-                         : golf::Decide(c, s, replay, cmd.seat(),
-                                        {cmd.decide().choice(), std::nullopt});
+        cmd.has_stroke()   ? golf::PlayStroke(c, s, replay, cmd.seat(), *RoundStrokeFromProto(cmd.stroke()))
+        : cmd.has_decide() ? golf::Decide(c, s, replay, cmd.seat(), {cmd.decide().choice(), std::nullopt})
+                           : golf::ShotClockExpired(c, s, replay);
     ASSERT_TRUE(step.ok()) << step.status();
     replay = step->state;
   }
@@ -288,6 +288,80 @@ TEST_F(RoundsTest, AWholeRoundMatchesTheOfflineRefereeAndItsRecordReplays) {
   more.set_token(made->seats(0).token());
   more.set_putt_speed_mps(1);
   EXPECT_EQ(reg_->Stroke(more).status().code(), absl::StatusCode::kFailedPrecondition);
+}
+
+// A swing stroke (the chapter's golfer with a 7-iron) is played as the offline referee plays it;
+// an unknown club and a swing that never reaches the ball are refused naming the field.
+TEST_F(RoundsTest, ASwingStrokeIsPlayedAsOffline) {
+  const v1::CreateRoundRequest create = TwoPlayers(2, 2);
+  absl::StatusOr<v1::CreateRoundResponse> made = reg_->Create(create);
+  ASSERT_TRUE(made.ok()) << made.status();
+  const golf::Course& c = **golf::BuiltinCourse("sportsim_links");
+  const golf::RoundSettings s = *RoundSettingsFromProto(create, c);
+  golf::RoundState st = *golf::StartRound(c, s);
+  v1::PlayStrokeRequest q;
+  q.set_round_id(made->round_id());
+  q.set_token(made->seats(0).token());
+  q.mutable_swing()->set_club("7-iron");
+  absl::StatusOr<v1::PlayStrokeResponse> r = reg_->Stroke(q);
+  ASSERT_TRUE(r.ok()) << r.status();
+  absl::StatusOr<golf::RoundStep> off = golf::PlayStroke(c, s, st, 0, *RoundStrokeFromProto(q));
+  ASSERT_TRUE(off.ok()) << off.status();
+  ASSERT_TRUE(WaitFor([&] { return AtRest(made->round_id()); }));
+  EXPECT_TRUE(MessageDifferencer::Equals(Offline(c, s, off->state), Get(made->round_id()).round()));
+  EXPECT_GT(off->state.players[0].ball.position_m.y() - st.players[0].ball.position_m.y(), 50.0)
+      << "a 7-iron flies north toward the pin";
+  v1::PlayStrokeRequest bad = q;
+  bad.set_token(made->seats(1).token());
+  bad.mutable_swing()->set_club("putter9");
+  EXPECT_THAT(reg_->Stroke(bad).status().message(), HasSubstr("swing.club"));
+  bad.mutable_swing()->set_club("driver");
+  bad.mutable_swing()->set_face_angle_deg(60);
+  absl::StatusOr<v1::PlayStrokeResponse> open = reg_->Stroke(bad);
+  EXPECT_EQ(open.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(open.status().message(), HasSubstr("face_angle_deg"));
+  // A shoulder torque past a human's (the realistic profile).
+  bad.mutable_swing()->set_face_angle_deg(0);
+  v1::TorqueKnot* knot = bad.mutable_swing()->mutable_torques()->mutable_qalpha()->add_knots();
+  knot->set_t_s(0);
+  knot->set_torque_nm(500);
+  absl::StatusOr<v1::PlayStrokeResponse> strong = reg_->Stroke(bad);
+  EXPECT_EQ(strong.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(strong.status().message(), HasSubstr("qalpha"));
+}
+
+// The shot clock: the seat to play takes a penalty stroke when it runs out, the record says so,
+// and a restore at that tick replays it.
+TEST_F(RoundsTest, TheShotClockPenalizesTheSeatToPlayAndReplays) {
+  MemoryJournal journal;
+  reg_->SetJournal(&journal);
+  v1::CreateRoundRequest create = TwoPlayers(1, 1);
+  create.set_shot_clock_s(5);
+  absl::StatusOr<v1::CreateRoundResponse> made = reg_->Create(create);
+  ASSERT_TRUE(made.ok()) << made.status();
+  const std::string id = made->round_id();
+  EXPECT_EQ(Get(id).clock_deadline_tick(), 150) << "5 s at 30 Hz";
+  ASSERT_TRUE(WaitFor([&] { return Get(id).round().players(0).penalties() >= 1; }));
+  v1::GetRoundRecordRequest rr;
+  rr.set_round_id(id);
+  const v1::RoundRecord record = *reg_->Record(rr);
+  ASSERT_GE(record.commands_size(), 1);
+  const v1::RoundCommand& first = record.commands(0);
+  EXPECT_TRUE(first.shot_clock());
+  EXPECT_EQ(first.seat(), 0);
+  EXPECT_EQ(first.tick(), 150);
+  EXPECT_EQ(Get(id).round().players(1).penalties(), 0u) << "only the seat to play";
+  // Restored at that tick: the same penalty, from the creation alone.
+  reg_ = std::make_unique<RoundRegistry>(Limits(), nullptr, 2);
+  ASSERT_TRUE(reg_->Restore(journal.Stored(id, first.tick())).ok());
+  const golf::Course& c = **golf::BuiltinCourse("sportsim_links");
+  const golf::RoundSettings s = *RoundSettingsFromProto(create, c);
+  const golf::RoundState once = golf::ShotClockExpired(c, s, *golf::StartRound(c, s))->state;
+  EXPECT_TRUE(MessageDifferencer::Equals(Offline(c, s, once), Get(id).round()));
+  EXPECT_EQ(Get(id).clock_deadline_tick(), 300) << "the clock restarted";
+  v1::CreateRoundRequest bad = TwoPlayers();
+  bad.set_shot_clock_s(-1);
+  EXPECT_THAT(reg_->Create(bad).status().message(), HasSubstr("shot_clock_s"));
 }
 
 // The journal: a round restored halfway from its commands is the round it was, and plays on

@@ -3,6 +3,8 @@
 // holed chip, the order of play), the relief areas each option drops in, the refusals.
 #include "sim/golf/round.h"
 
+#include "sim/swing/swing_simulation.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -482,6 +484,82 @@ TEST_F(RoundTest, NoiseIsDrawnFromTheSeedPerStroke) {
   const double mean = sum / 400, sd = std::sqrt(sum2 / 400 - mean * mean);
   EXPECT_NEAR(mean, 0.0, 0.003);
   EXPECT_NEAR(sd, 0.015, 0.0025);
+}
+
+}  // namespace
+}  // namespace sportsim::golf
+
+namespace sportsim::golf {
+namespace {
+
+SwingStroke ChapterSwing(std::string_view club) {
+  SwingStroke s;
+  s.model = std::make_shared<const swing::SwingModel>(*swing::SwingModel::Create(swing::SwingParams{}));
+  s.club = *ClubPreset(club);
+  return s;
+}
+
+// A swing stroke: the chapter's golfer and program run to impact, the club's impact, then the
+// same shot as a launch with those conditions.
+TEST(RoundSwingTest, ASwingStrokeIsTheLaunchItsImpactGives) {
+  RoundSettings s;
+  s.players = {{"Ann", ""}};
+  const RoundState st = *StartRound(Links(), s);
+  RoundStroke k;
+  k.kind = RoundStroke::Kind::kSwing;
+  k.swing = ChapterSwing("driver");
+  k.aim_deg = 0.0;
+  absl::StatusOr<SwingLaunch> launch = LaunchFromSwing(*k.swing, s.ball);
+  ASSERT_TRUE(launch.ok()) << launch.status();
+  // The clubhead at impact is the swing's own; a driver's smash factor is about 1.45.
+  swing::SwingRunOptions run;
+  absl::StatusOr<swing::SwingRunResult> swung =
+      swing::SimulateSwing(*k.swing->model, k.swing->program, swing::SwingSolverOptions{}, run);
+  ASSERT_TRUE(swung.ok() && swung->impact);
+  EXPECT_EQ(launch->clubhead_speed_mps, swung->impact->clubhead_speed_ground_mps);
+  EXPECT_GT(launch->launch.ball_speed_mps / launch->clubhead_speed_mps, 1.3);
+  EXPECT_LT(launch->launch.ball_speed_mps / launch->clubhead_speed_mps, 1.55);
+  const CourseShot shot = *StrokeShot(Links(), s, st, 0, k);
+  EXPECT_EQ(shot.launch.ball_speed_mps, launch->launch.ball_speed_mps);
+  EXPECT_EQ(shot.launch.spin_rpm, launch->launch.spin_rpm);
+  RoundStroke as_launch;
+  as_launch.launch = launch->launch;
+  as_launch.aim_deg = 0.0;
+  CourseShotResult a, b;
+  ASSERT_TRUE(PlayStroke(Links(), s, st, 0, k, &a).ok());
+  ASSERT_TRUE(PlayStroke(Links(), s, st, 0, as_launch, &b).ok());
+  EXPECT_EQ(a.ground.rest_m, b.ground.rest_m);
+  EXPECT_GT(a.flight->carry_m, 100.0);
+  // A wedge goes higher and shorter than the driver.
+  k.swing = ChapterSwing("pitching-wedge");
+  CourseShotResult w;
+  ASSERT_TRUE(PlayStroke(Links(), s, st, 0, k, &w).ok());
+  EXPECT_LT(w.flight->carry_m, a.flight->carry_m);
+  EXPECT_GT(w.flight->landing_angle_deg, a.flight->landing_angle_deg);
+}
+
+TEST(RoundSwingTest, TheRealisticProfileRefusesInhumanTorquesAndClubheads) {
+  RoundSettings s;
+  s.players = {{"Ann", ""}};
+  const RoundState st = *StartRound(Links(), s);
+  RoundStroke k;
+  k.kind = RoundStroke::Kind::kSwing;
+  k.swing = ChapterSwing("driver");
+  k.swing->program = swing::TorqueProgram::Constant(400, 0);
+  absl::Status torque = CheckStroke(Links(), s, st, 0, k);
+  EXPECT_EQ(torque.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(torque.message(), HasSubstr("qalpha"));
+  // Within each torque's bound, but together past a human's clubhead speed.
+  k.swing->program = swing::TorqueProgram::Constant(340, 25);
+  ASSERT_TRUE(CheckStroke(Links(), s, st, 0, k).ok());
+  absl::StatusOr<SwingLaunch> fast = LaunchFromSwing(*k.swing, s.ball);
+  ASSERT_TRUE(fast.ok()) << fast.status();
+  ASSERT_GT(fast->clubhead_speed_mps, 70.0) << "the case needs a swing past the bound";
+  absl::StatusOr<CourseShot> refused = StrokeShot(Links(), s, st, 0, k);
+  EXPECT_EQ(refused.status().code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(refused.status().message(), HasSubstr("clubhead"));
+  s.realism = Realism::kArcade;
+  EXPECT_TRUE(CheckStroke(Links(), s, st, 0, k).ok());
 }
 
 }  // namespace
