@@ -24,6 +24,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/synchronization/mutex.h"
+#include "bench/load_watch.h"
 #include "server/app/server_app.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
@@ -41,12 +42,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double ProcessCpuSeconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
+using bench::ProcessCpuSeconds;
 
 double ThreadCpuSeconds() {
   timespec t{};
@@ -54,40 +50,7 @@ double ThreadCpuSeconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-// One watcher: reads snapshots as fast as they come and counts them and their bytes.
-class Watch final : public grpc::ClientReadReactor<v1::RoundSnapshot> {
- public:
-  Watch(v1::Swing::Stub* stub, const v1::WatchRoundRequest& request) : request_(request) {
-    stub->async()->WatchRound(&ctx_, &request_, this);
-    StartRead(&snap_);
-    StartCall();
-  }
-  void OnReadDone(bool ok) override {
-    if (!ok) return;
-    snapshots_.fetch_add(1, std::memory_order_relaxed);
-    bytes_.fetch_add(static_cast<int64_t>(snap_.ByteSizeLong()), std::memory_order_relaxed);
-    StartRead(&snap_);
-  }
-  void OnDone(const grpc::Status&) override {
-    absl::MutexLock lock(&mu_);
-    done_ = true;
-  }
-  void Stop() {
-    ctx_.TryCancel();
-    absl::MutexLock lock(&mu_);
-    mu_.Await(absl::Condition(&done_));
-  }
-  int64_t snapshots() const { return snapshots_.load(); }
-  int64_t bytes() const { return bytes_.load(); }
-
- private:
-  grpc::ClientContext ctx_;
-  v1::WatchRoundRequest request_;
-  v1::RoundSnapshot snap_;
-  std::atomic<int64_t> snapshots_{0}, bytes_{0};
-  absl::Mutex mu_;
-  bool done_ = false;
-};
+using Watch = bench::CountingWatch<v1::WatchRoundRequest, v1::RoundSnapshot>;
 
 struct R {
   std::string id, admin;
@@ -170,7 +133,13 @@ int Run() {
       r.past_snapshots += r.watch->snapshots();
       r.past_bytes += r.watch->bytes();
     }
-    r.watch = std::make_unique<Watch>(stubs[static_cast<size_t>(made) % stubs.size()].get(), w);
+    v1::Swing::Stub* stub = stubs[static_cast<size_t>(made) % stubs.size()].get();
+    r.watch = std::make_unique<Watch>(
+        [stub](grpc::ClientContext* ctx, const v1::WatchRoundRequest* q,
+               grpc::ClientReadReactor<v1::RoundSnapshot>* reactor) {
+          stub->async()->WatchRound(ctx, q, reactor);
+        },
+        w);
     r.next = first;
     return true;
   };

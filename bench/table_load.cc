@@ -22,6 +22,7 @@
 #include "absl/flags/parse.h"
 #include "absl/flags/usage.h"
 #include "absl/synchronization/mutex.h"
+#include "bench/load_watch.h"
 #include "server/app/server_app.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
@@ -46,56 +47,25 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double ProcessCpuSeconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+using bench::ProcessCpuSeconds;
+
+// One watcher: reads snapshots as fast as they come, and flags the table idle when its shot
+// ends (a resynced reader may have lost shot_end, but it still sees the table at rest).
+using Watch = bench::CountingWatch<v1::WatchTableRequest, v1::TableSnapshot>;
+
+std::unique_ptr<Watch> NewWatch(v1::Billiards::Stub* stub, const v1::WatchTableRequest& request,
+                                std::atomic<bool>* idle) {
+  return std::make_unique<Watch>(
+      [stub](grpc::ClientContext* ctx, const v1::WatchTableRequest* r,
+             grpc::ClientReadReactor<v1::TableSnapshot>* reactor) {
+        stub->async()->WatchTable(ctx, r, reactor);
+      },
+      request, [idle](const v1::TableSnapshot& snap) {
+        bool rest = snap.resync() && snap.at_rest();
+        for (const v1::TableEvent& e : snap.events()) rest |= e.kind() == v1::shot_end;
+        if (rest && idle != nullptr) idle->store(true);
+      });
 }
-
-// One watcher: reads snapshots as fast as they come, counts them and their bytes, and flags the
-// table idle when its shot ends.
-class Watch final : public grpc::ClientReadReactor<v1::TableSnapshot> {
- public:
-  Watch(v1::Billiards::Stub* stub, const v1::WatchTableRequest& request,
-        std::atomic<bool>* idle)
-      : request_(request), idle_(idle) {
-    stub->async()->WatchTable(&ctx_, &request_, this);
-    StartRead(&snap_);
-    StartCall();
-  }
-  void OnReadDone(bool ok) override {
-    if (!ok) return;
-    snapshots_.fetch_add(1, std::memory_order_relaxed);
-    bytes_.fetch_add(static_cast<int64_t>(snap_.ByteSizeLong()), std::memory_order_relaxed);
-    // Idle when the shot ends; a resynced reader may have lost shot_end, but it still sees
-    // the table at rest.
-    bool idle = snap_.resync() && snap_.at_rest();
-    for (const v1::TableEvent& e : snap_.events()) idle |= e.kind() == v1::shot_end;
-    if (idle && idle_ != nullptr) idle_->store(true);
-    StartRead(&snap_);
-  }
-  void OnDone(const grpc::Status&) override {
-    absl::MutexLock lock(&mu_);
-    done_ = true;
-  }
-  void Stop() {
-    ctx_.TryCancel();
-    absl::MutexLock lock(&mu_);
-    mu_.Await(absl::Condition(&done_));
-  }
-  int64_t snapshots() const { return snapshots_.load(); }
-  int64_t bytes() const { return bytes_.load(); }
-
- private:
-  grpc::ClientContext ctx_;
-  v1::WatchTableRequest request_;
-  v1::TableSnapshot snap_;
-  std::atomic<bool>* idle_;
-  std::atomic<int64_t> snapshots_{0}, bytes_{0};
-  absl::Mutex mu_;
-  bool done_ = false;
-};
 
 int Run() {
   const int n = absl::GetFlag(FLAGS_tables);
@@ -152,8 +122,8 @@ int Run() {
       if (absl::GetFlag(FLAGS_positions_only)) req.add_fields(v1::SNAPSHOT_FIELD_POSITION);
       // Only the first watcher of a table decides when it is idle (the others would re-flag a
       // shot_end the shooter already acted on).
-      watches.push_back(std::make_unique<Watch>(stubs[watches.size() % stubs.size()].get(), req,
-                                                w == 0 ? &tables[i]->idle : nullptr));
+      watches.push_back(NewWatch(stubs[watches.size() % stubs.size()].get(), req,
+                                 w == 0 ? &tables[i]->idle : nullptr));
     }
   }
 
