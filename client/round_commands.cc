@@ -1,5 +1,6 @@
 // `sportsim round create|list|get|delete|stroke|decide|watch|scorecard|record`: rounds of golf
 // on a course (Swing/CreateRound ... WatchRound, GetRoundRecord).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -123,8 +124,14 @@ void PrintRound(const v1::RoundState& r) {
                              b.distance_to_pin_m() / kMetresPerYard, Lie(b.lie()).c_str(),
                              b.marked() ? " (marked)" : "");
     }
-    std::printf("  seat %u %-12s %-60s total %u (%s)\n", p.seat(), p.name().c_str(), ball.c_str(),
-                p.total(), ToPar(p.to_par()).c_str());
+    std::printf("  seat %u %-12s %-60s score %u (%s after %d hole%s)\n", p.seat(),
+                p.name().c_str(), ball.c_str(), p.score(), ToPar(p.to_par()).c_str(),
+                static_cast<int>(std::count_if(p.scores().begin(), p.scores().end(),
+                                               [](uint32_t v) { return v > 0; })),
+                std::count_if(p.scores().begin(), p.scores().end(),
+                              [](uint32_t v) { return v > 0; }) == 1
+                    ? ""
+                    : "s");
   }
 }
 
