@@ -570,11 +570,8 @@ absl::StatusOr<v1::PlayStrokeResponse> RoundRegistry::Stroke(const v1::PlayStrok
     state = r.state;
     version = r.version;
   }
-  // Checked and simulated off the round's lock; it takes effect only on the state it was
-  // computed on.
-  if (absl::Status s = golf::CheckStroke(*r.course, r.settings, state, seat, *stroke); !s.ok()) {
-    return s;
-  }
+  // Checked (PlayStroke checks first) and simulated off the round's lock; it takes effect only
+  // on the state it was computed on.
   absl::StatusOr<PlayedStroke> played = Play(*r.course, r.settings, state, seat, *stroke, version, cancelled);
   if (!played.ok()) return played.status();
   return host_.Act<v1::PlayStrokeResponse>(

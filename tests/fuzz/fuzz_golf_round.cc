@@ -39,7 +39,6 @@ bool SameBalls(const golf::RoundState& a, const golf::RoundState& b) {
 
 void Check(const golf::Course& c, const golf::RoundSettings& s, const golf::RoundState& st,
            const char* after) {
-  const double r = s.ball.radius_m();
   const int n = static_cast<int>(st.players.size());
   FUZZ_CHECK(st.hole >= s.first_hole && st.hole <= s.last_hole, "after %s: hole %d", after, st.hole);
   for (int i = 0; i < n; ++i) {
