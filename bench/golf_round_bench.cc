@@ -59,15 +59,20 @@ void BM_Stroke(benchmark::State& state) {
 }
 BENCHMARK(BM_Stroke)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
-// The referee alone on a drive's result.
+// The referee alone. Arg: 0 a drive's result (at rest on the fairway), 1 a drive into hole 3's
+// red creek (the crossing point and the relief options found).
 void BM_Judge(benchmark::State& state) {
-  const RoundSettings s = Settings(1);
+  RoundSettings s = Settings(1);
+  const bool creek = state.range(0) == 1;
+  if (creek) s.first_hole = 3;
   const RoundState st = *StartRound(Links(), s);
-  const CourseShot shot = *StrokeShot(Links(), s, st, 0, Launch(70, 11, 2700));
+  RoundStroke k = creek ? Launch(60, 12, 3000) : Launch(70, 11, 2700);
+  if (creek) k.aim_deg = 194.0;
+  const CourseShot shot = *StrokeShot(Links(), s, st, 0, k);
   const CourseShotResult played = *PlayCourseShot(Links(), shot);
   for (auto _ : state) benchmark::DoNotOptimize(JudgeStroke(Links(), s, st, 0, played));
 }
-BENCHMARK(BM_Judge)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_Judge)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 // The fixed policy's next step on `st` (a decision or a stroke by the seat to play).
 absl::StatusOr<RoundStep> Next(const RoundSettings& s, const RoundState& st) {

@@ -25,6 +25,7 @@
 #include "absl/flags/usage.h"
 #include "absl/synchronization/mutex.h"
 #include "bench/load_watch.h"
+#include "sim/core/cpu_clock.h"
 #include "server/app/server_app.h"
 #include "sportsim/v1/swing.grpc.pb.h"
 
@@ -44,11 +45,6 @@ using Clock = std::chrono::steady_clock;
 
 using bench::ProcessCpuSeconds;
 
-double ThreadCpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
 
 using Watch = bench::CountingWatch<v1::WatchRoundRequest, v1::RoundSnapshot>;
 
@@ -183,16 +179,14 @@ int Run() {
 
   std::this_thread::sleep_for(std::chrono::duration<double>(absl::GetFlag(FLAGS_warmup)));
   struct S {
-    server::WorldStats stats;
-    std::vector<int64_t> latency;
+    bench::HostSample host;
     int64_t snapshots = 0, bytes = 0, commands = 0, finished = 0, player_ns = 0;
     double cpu = 0;
     Clock::time_point at;
   };
   const auto snapshot = [&] {
     S s;
-    s.stats = reg.stats();
-    s.latency = reg.publish_to_write().Counts();
+    s.host = {reg.stats(), reg.publish_to_write().Counts()};
     for (const R& r : rounds) {  // (a round replaced meanwhile may be off by one watcher)
       s.snapshots += r.past_snapshots + r.watch->snapshots();
       s.bytes += r.past_bytes + r.watch->bytes();
@@ -211,14 +205,8 @@ int Run() {
   player.join();
 
   const double secs = std::chrono::duration<double>(b.at - a.at).count();
-  const double ticks = static_cast<double>(b.stats.ticks - a.stats.ticks);
-  const double late = static_cast<double>(b.stats.late_ticks - a.stats.late_ticks);
-  const double slipped = static_cast<double>(b.stats.slipped_ticks - a.stats.slipped_ticks);
-  const double sent = static_cast<double>(b.stats.snapshots_sent - a.stats.snapshots_sent);
+  const bench::HostWindow w = bench::Between(a.host, b.host, secs);
   const double cmds = static_cast<double>(b.commands - a.commands);
-  const double tick_cpu = 1e-9 * static_cast<double>(b.stats.tick_cpu_ns - a.stats.tick_cpu_ns);
-  std::vector<int64_t> window = b.latency;
-  for (size_t i = 0; i < window.size(); ++i) window[i] -= a.latency[i];
   std::printf("rounds %d (4 players) at %g Hz, a command every %g s each, a watcher each at %g "
               "Hz, %.1f s measured\n",
               n, absl::GetFlag(FLAGS_tick_hz), absl::GetFlag(FLAGS_stroke_every),
@@ -227,20 +215,17 @@ int Run() {
               cmds / secs, static_cast<long long>(b.finished - a.finished));
   std::printf("command CPU              %.2f ms each (the stroke's simulation and ruling)\n",
               cmds > 0 ? 1e-6 * static_cast<double>(b.player_ns - a.player_ns) / cmds : 0.0);
-  std::printf("moving balls (end)       %d\n", b.stats.running);
-  std::printf("ticks/s                  %.0f\n", ticks / secs);
-  std::printf("late ticks               %.3f %%  (+ %.3f %% slipped)\n",
-              ticks > 0 ? 100 * late / ticks : 0, ticks > 0 ? 100 * slipped / ticks : 0);
-  std::printf("snapshots/s              %.0f written, %.0f read by clients\n", sent / secs,
+  std::printf("moving balls (end)       %d\n", b.host.stats.running);
+  std::printf("ticks/s                  %.0f\n", w.ticks);
+  std::printf("late ticks               %.3f %%  (+ %.3f %% slipped)\n", w.late_pct, w.slipped_pct);
+  std::printf("snapshots/s              %.0f written, %.0f read by clients\n", w.sent,
               static_cast<double>(b.snapshots - a.snapshots) / secs);
-  std::printf("publish-to-write         p50 %.3f ms, p99 %.3f ms\n",
-              1e3 * server::LatencyHistogram::QuantileOf(window, 0.5),
-              1e3 * server::LatencyHistogram::QuantileOf(window, 0.99));
+  std::printf("publish-to-write         p50 %.3f ms, p99 %.3f ms\n", w.p50_ms, w.p99_ms);
   std::printf("bytes per watcher        %.0f B/s (payload)\n",
               static_cast<double>(b.bytes - a.bytes) / secs / n);
   std::printf("CPU                      tick workers %.2f cores, whole process %.2f cores "
               "(server and clients)\n",
-              tick_cpu / secs, (b.cpu - a.cpu) / secs);
+              w.tick_cores, (b.cpu - a.cpu) / secs);
   for (R& r : rounds) r.watch->Stop();
   (*app)->Shutdown(absl::Seconds(1));
   (*app)->Wait();

@@ -162,14 +162,12 @@ int Run() {
   std::this_thread::sleep_for(std::chrono::duration<double>(absl::GetFlag(FLAGS_warmup)));
   const auto snapshot = [&] {
     struct S {
-      server::WorldStats stats;
-      std::vector<int64_t> latency;
+      bench::HostSample host;
       int64_t client_snapshots = 0, bytes = 0, shots = 0;
       double cpu = 0;
       Clock::time_point at;
     } s;
-    s.stats = reg.stats();
-    s.latency = reg.publish_to_write().Counts();
+    s.host = {reg.stats(), reg.publish_to_write().Counts()};
     for (const auto& w : watches) {
       s.client_snapshots += w->snapshots();
       s.bytes += w->bytes();
@@ -186,20 +184,9 @@ int Run() {
   shooter.join();
 
   const double secs = std::chrono::duration<double>(b.at - a.at).count();
-  const double ticks = static_cast<double>(b.stats.ticks - a.stats.ticks);
-  const double late = static_cast<double>(b.stats.late_ticks - a.stats.late_ticks);
-  const double slipped = static_cast<double>(b.stats.slipped_ticks - a.stats.slipped_ticks);
-  const double sent = static_cast<double>(b.stats.snapshots_sent - a.stats.snapshots_sent);
+  const bench::HostWindow w = bench::Between(a.host, b.host, secs);
   const double got = static_cast<double>(b.client_snapshots - a.client_snapshots);
-  const double replaced =
-      static_cast<double>(b.stats.snapshots_replaced - a.stats.snapshots_replaced);
   const double nw = std::max<double>(1.0, static_cast<double>(watches.size()));
-  const double tick_cpu = 1e-9 * static_cast<double>(b.stats.tick_cpu_ns - a.stats.tick_cpu_ns);
-  // The window's latencies: b's counts minus a's.
-  std::vector<int64_t> window = b.latency;
-  for (size_t i = 0; i < window.size(); ++i) window[i] -= a.latency[i];
-  const double p50 = server::LatencyHistogram::QuantileOf(window, 0.5);
-  const double p99 = server::LatencyHistogram::QuantileOf(window, 0.99);
   std::printf(
       "tables %d at %g Hz (%s engine), %d watcher(s) each at %g Hz%s%s, %d tick workers, %.1f s "
       "measured\n",
@@ -210,23 +197,23 @@ int Run() {
       config.tick_workers > 0 ? config.tick_workers
                                 : static_cast<int>(std::thread::hardware_concurrency()),
       secs);
-  std::printf("moving tables (end)      %d\n", b.stats.running);
-  std::printf("ticks/s                  %.0f (of %.0f if all %d moved)\n", ticks / secs,
+  std::printf("moving tables (end)      %d\n", b.host.stats.running);
+  std::printf("ticks/s                  %.0f (of %.0f if all %d moved)\n", w.ticks,
               n * absl::GetFlag(FLAGS_tick_hz), n);
-  std::printf("late ticks               %.3f %%  (+ %.3f %% slipped)\n",
-              ticks > 0 ? 100 * late / ticks : 0, ticks > 0 ? 100 * slipped / ticks : 0);
+  std::printf("late ticks               %.3f %%  (+ %.3f %% slipped)\n", w.late_pct,
+              w.slipped_pct);
   std::printf("snapshots/s              %.0f written, %.0f read by clients, %.0f replaced\n",
-              sent / secs, got / secs, replaced / secs);
+              w.sent, got / secs, w.replaced);
   std::printf("publish-to-write         p50 %.3f ms, p99 %.3f ms (from the tick's deadline; "
               "bucket upper edges)\n",
-              p50 * 1e3, p99 * 1e3);
+              w.p50_ms, w.p99_ms);
   std::printf("bytes per watcher        %.0f B/s (payload)\n",
               static_cast<double>(b.bytes - a.bytes) / secs / nw);
   std::printf("shots                    %lld started\n",
               static_cast<long long>(b.shots - a.shots));
   std::printf("CPU                      tick workers %.2f cores, whole process %.2f cores "
               "(server and clients)\n",
-              tick_cpu / secs, (b.cpu - a.cpu) / secs);
+              w.tick_cores, (b.cpu - a.cpu) / secs);
 
   for (auto& w : watches) w->Stop();
   (*app)->Shutdown(absl::Seconds(1));

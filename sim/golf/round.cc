@@ -61,6 +61,24 @@ const CourseTee& TeeOf(const CourseHole& hole, const std::string& name) {
   return hole.tees.front();
 }
 
+// The area of the course (Rule 2.2) of a ball at `spot`, and its lie (`lie`, when given): one
+// LieAt and one SurfaceAt on the index.
+CourseAreaKind AreaAt(const CourseIndex& at, int hole, const Vector2d& spot, double r,
+                      Terrain* lie_out = nullptr) {
+  const Terrain lie = at.LieAt(spot.x(), spot.y(), r);
+  if (lie_out != nullptr) *lie_out = lie;
+  const Course::Spot under = at.SurfaceAt(spot.x(), spot.y());
+  const bool this_hole = under.hole == 0 || under.hole == hole || under.terrain != lie;
+  switch (lie) {
+    case Terrain::kWaterHazard:
+    case Terrain::kLateralWaterHazard: return CourseAreaKind::kPenaltyArea;
+    case Terrain::kBunker: return CourseAreaKind::kBunker;
+    case Terrain::kGreen: return this_hole ? CourseAreaKind::kGreen : CourseAreaKind::kGeneral;
+    case Terrain::kTee: return this_hole ? CourseAreaKind::kTeeing : CourseAreaKind::kGeneral;
+    default: return CourseAreaKind::kGeneral;
+  }
+}
+
 // A relief area (Rule 14.3): within `radius` of the reference point, not nearer the hole than
 // it, in bounds, and in the area `where` says.
 struct Relief {
@@ -71,13 +89,14 @@ struct Relief {
   CourseAreaKind same = CourseAreaKind::kGeneral;  // kSameArea
 };
 
-bool InRelief(const Course& course, int hole, const Relief& relief, const Vector2d& p, double r) {
+bool InRelief(const CourseIndex& at, int hole, const Relief& relief, const Vector2d& p, double r) {
   if ((p - relief.reference).norm() > relief.radius_m * (1.0 + 1e-12)) return false;
-  const Vector2d pin = Pin(course, hole);
+  const Vector2d pin = Pin(at.course(), hole);
   if ((p - pin).norm() < (relief.reference - pin).norm() * (1.0 - 1e-12)) return false;
-  if (!course.terrain.Covers(p.x(), p.y())) return false;
-  if (course.LieAt(p.x(), p.y(), r) == Terrain::kOutOfBounds) return false;
-  const CourseAreaKind a = AreaOfCourse(course, hole, p, r);
+  if (!at.course().terrain.Covers(p.x(), p.y())) return false;
+  Terrain lie = Terrain::kRough;
+  const CourseAreaKind a = AreaAt(at, hole, p, r, &lie);
+  if (lie == Terrain::kOutOfBounds) return false;
   switch (relief.where) {
     case Relief::Where::kOutsidePenaltyArea: return a != CourseAreaKind::kPenaltyArea;
     case Relief::Where::kInBunker: return a == CourseAreaKind::kBunker;
@@ -90,7 +109,7 @@ bool InRelief(const Course& course, int hole, const Relief& relief, const Vector
 
 // The share of the relief circle's area a drop may come to rest in, on a 21 x 21 grid over its
 // square (at most about one half: "not nearer the hole" takes the other).
-double ReliefShare(const Course& course, int hole, const Relief& relief, double r) {
+double ReliefShare(const CourseIndex& at, int hole, const Relief& relief, double r) {
   constexpr int kN = 21;
   int inside = 0, valid = 0;
   for (int i = 0; i < kN; ++i) {
@@ -98,7 +117,7 @@ double ReliefShare(const Course& course, int hole, const Relief& relief, double 
       const Vector2d d(2.0 * i / (kN - 1) - 1.0, 2.0 * j / (kN - 1) - 1.0);
       if (d.squaredNorm() > 1.0) continue;
       ++inside;
-      valid += InRelief(course, hole, relief, relief.reference + relief.radius_m * d, r) ? 1 : 0;
+      valid += InRelief(at, hole, relief, relief.reference + relief.radius_m * d, r) ? 1 : 0;
     }
   }
   return static_cast<double>(valid) / inside;
@@ -127,11 +146,12 @@ Relief BackOnTheLine(const Course& course, int hole, const RoundDecision& d, dou
 
 // The reference point itself must be where the relief is taken to (not in the penalty area, in
 // or out of the bunker as chosen), in bounds, and the area around it must leave room to drop.
-bool UsableBackOnTheLine(const Course& course, int hole, const Relief& relief, double r) {
+bool UsableBackOnTheLine(const CourseIndex& at, int hole, const Relief& relief, double r) {
   const Vector2d p = relief.reference;
-  if (!course.terrain.Covers(p.x(), p.y())) return false;
-  if (course.LieAt(p.x(), p.y(), r) == Terrain::kOutOfBounds) return false;
-  const CourseAreaKind a = AreaOfCourse(course, hole, p, r);
+  if (!at.course().terrain.Covers(p.x(), p.y())) return false;
+  Terrain lie = Terrain::kRough;
+  const CourseAreaKind a = AreaAt(at, hole, p, r, &lie);
+  if (lie == Terrain::kOutOfBounds) return false;
   switch (relief.where) {
     case Relief::Where::kInBunker:
       if (a != CourseAreaKind::kBunker) return false;
@@ -142,7 +162,7 @@ bool UsableBackOnTheLine(const Course& course, int hole, const Relief& relief, d
     default:
       if (a == CourseAreaKind::kPenaltyArea) return false;
   }
-  return ReliefShare(course, hole, relief, r) >= 0.25;
+  return ReliefShare(at, hole, relief, r) >= 0.25;
 }
 
 constexpr double kBackStepM = 0.5;
@@ -150,13 +170,13 @@ constexpr double kBackMaxM = 500.0;
 
 // The nearest usable reference point behind: from 0 behind a penalty area's crossing (the
 // crossing itself lies on the edge), from a club-length behind an unplayable ball.
-std::optional<double> DefaultBack(const Course& course, int hole, const RoundDecision& d,
+std::optional<double> DefaultBack(const CourseIndex& at, int hole, const RoundDecision& d,
                                   bool outside_bunker, double r) {
   const double from = d.reason == "unplayable" && !outside_bunker && d.area != Terrain::kBunker
                           ? kClubLengthM
                           : 0.0;
   for (double back = from; back <= kBackMaxM; back += kBackStepM) {
-    if (UsableBackOnTheLine(course, hole, BackOnTheLine(course, hole, d, back, outside_bunker), r)) {
+    if (UsableBackOnTheLine(at, hole, BackOnTheLine(at.course(), hole, d, back, outside_bunker), r)) {
       return back;
     }
   }
@@ -171,14 +191,14 @@ Relief Lateral(const RoundDecision& d) {
   return relief;
 }
 
-std::vector<std::string> Choices(const Course& course, int hole, const RoundDecision& d,
+std::vector<std::string> Choices(const CourseIndex& at, int hole, const RoundDecision& d,
                                  double r) {
   std::vector<std::string> out = {"stroke_and_distance"};
-  if (DefaultBack(course, hole, d, false, r)) out.push_back("back_on_the_line");
+  if (DefaultBack(at, hole, d, false, r)) out.push_back("back_on_the_line");
   const bool lateral = d.reason == "unplayable" || d.area == Terrain::kLateralWaterHazard;
-  if (lateral && ReliefShare(course, hole, Lateral(d), r) > 0.0) out.push_back("lateral");
+  if (lateral && ReliefShare(at, hole, Lateral(d), r) > 0.0) out.push_back("lateral");
   if (d.reason == "unplayable" && d.area == Terrain::kBunker &&
-      DefaultBack(course, hole, d, true, r)) {
+      DefaultBack(at, hole, d, true, r)) {
     out.push_back("back_on_the_line_outside_bunker");
   }
   return out;
@@ -202,9 +222,11 @@ class Referee {
  public:
   Referee(const Course& course, const RoundSettings& settings, const RoundState& state,
           const std::function<bool()>& cancelled)
-      : course_(course), settings_(settings), cancelled_(cancelled) {
+      : course_(course), at_(course), settings_(settings), cancelled_(cancelled) {
     step_.state = state;
   }
+
+  const CourseIndex& at() const { return at_; }
 
   RoundState& state() { return step_.state; }
   RoundPlayer& player(int seat) { return step_.state.players[seat]; }
@@ -232,7 +254,7 @@ class Referee {
   void Put(int seat, const Vector3d& p) {
     RoundBall& b = player(seat).ball;
     b.position_m = p;
-    b.lie = course_.LieAt(p.x(), p.y(), r());
+    b.lie = at_.LieAt(p.x(), p.y(), r());
     b.holed = false;
   }
 
@@ -258,13 +280,13 @@ class Referee {
       if (!g.ok()) return g.status();
       const Vector3d rest = g->rest_m;
       const bool in_area = !g->holed && !g->out_of_bounds && !g->penalty_area &&
-                           InRelief(course_, hole, relief, rest.head<2>(), r());
+                           InRelief(at_, hole, relief, rest.head<2>(), r());
       RoundEvent& e = Emit(RoundEventKind::kDrop, seat);
       e.position_m = start.position_m;
       e.rest_m = rest;
       e.attempt = attempt;
       e.in_area = in_area;
-      e.lie = std::string(TerrainTag(course_.LieAt(rest.x(), rest.y(), r())));
+      e.lie = std::string(TerrainTag(at_.LieAt(rest.x(), rest.y(), r())));
       if (in_area) {
         Put(seat, rest);
         return absl::OkStatus();
@@ -284,7 +306,7 @@ class Referee {
   absl::Status ReturnToLastSpot(int seat) {
     RoundBall& b = player(seat).ball;
     const Vector3d spot = b.last_spot_m;
-    const CourseAreaKind area = AreaOfCourse(course_, state().hole, spot.head<2>(), r());
+    const CourseAreaKind area = AreaAt(at_, state().hole, spot.head<2>(), r());
     if (area == CourseAreaKind::kTeeing || area == CourseAreaKind::kGreen) {
       Put(seat, spot);
       RoundEvent& e = Emit(RoundEventKind::kPlaced, seat);
@@ -337,7 +359,7 @@ class Referee {
     for (size_t i = 0; i < st.players.size(); ++i) {
       RoundBall& b = st.players[i].ball;
       const bool on_green =
-          !b.holed && AreaOfCourse(course_, st.hole, b.position_m.head<2>(), r()) == CourseAreaKind::kGreen;
+          !b.holed && AreaAt(at_, st.hole, b.position_m.head<2>(), r()) == CourseAreaKind::kGreen;
       const bool mark = on_green && static_cast<int>(i) != next;
       if (mark != b.marked) {
         b.marked = mark;
@@ -366,7 +388,7 @@ class Referee {
     d.reason = std::move(reason);
     d.area = area;
     d.reference_m = reference;
-    d.choices = Choices(course_, state().hole, d, r());
+    d.choices = Choices(at_, state().hole, d, r());
     RoundEvent& e = Emit(RoundEventKind::kDecision, seat);
     e.reason = d.reason;
     e.rule = d.reason == "penalty_area" ? "17.1d" : (area == Terrain::kBunker ? "19.3" : "19.2");
@@ -386,20 +408,21 @@ class Referee {
       const double a = 2.0 * std::numbers::pi * Uniform(settings_.seed, kDropStream, st.draws++);
       const double rr = relief.radius_m * std::sqrt(Uniform(settings_.seed, kDropStream, st.draws++));
       const Vector2d p = relief.reference + rr * Vector2d(std::cos(a), std::sin(a));
-      if (InRelief(course_, hole, relief, p, r())) return p;
+      if (InRelief(at_, hole, relief, p, r())) return p;
     }
     constexpr int kN = 41;
     for (int i = 0; i < kN; ++i) {
       for (int j = 0; j < kN; ++j) {
         const Vector2d d(2.0 * i / (kN - 1) - 1.0, 2.0 * j / (kN - 1) - 1.0);
         const Vector2d p = relief.reference + relief.radius_m * d;
-        if (d.squaredNorm() <= 1.0 && InRelief(course_, hole, relief, p, r())) return p;
+        if (d.squaredNorm() <= 1.0 && InRelief(at_, hole, relief, p, r())) return p;
       }
     }
     return relief.reference;
   }
 
   const Course& course_;
+  const CourseIndex at_;  // the surface queries of drops and relief areas, sped up
   const RoundSettings& settings_;
   const std::function<bool()>& cancelled_;
   RoundStep step_;
@@ -579,17 +602,7 @@ absl::Status SetRoundVariant(std::string_view name, std::string_view value, Roun
 // --- areas ------------------------------------------------------------------------------------
 
 CourseAreaKind AreaOfCourse(const Course& course, int hole, const Vector2d& spot, double r) {
-  const Terrain lie = course.LieAt(spot.x(), spot.y(), r);
-  const Course::Spot under = course.SurfaceAt(spot.x(), spot.y());
-  const bool this_hole = under.hole == 0 || under.hole == hole || under.terrain != lie;
-  switch (lie) {
-    case Terrain::kWaterHazard:
-    case Terrain::kLateralWaterHazard: return CourseAreaKind::kPenaltyArea;
-    case Terrain::kBunker: return CourseAreaKind::kBunker;
-    case Terrain::kGreen: return this_hole ? CourseAreaKind::kGreen : CourseAreaKind::kGeneral;
-    case Terrain::kTee: return this_hole ? CourseAreaKind::kTeeing : CourseAreaKind::kGeneral;
-    default: return CourseAreaKind::kGeneral;
-  }
+  return AreaAt(CourseIndex(course), hole, spot, r);
 }
 
 // --- the round --------------------------------------------------------------------------------
@@ -772,7 +785,7 @@ absl::StatusOr<RoundStep> JudgeStroke(const Course& course, const RoundSettings&
       // outside, then bisection toward the next (the path's points are its lowest point's).
       const double r = ref.r();
       auto inside = [&](const Vector2d& q) {
-        return !course.terrain.Covers(q.x(), q.y()) || IsPenaltyArea(course.LieAt(q.x(), q.y(), r));
+        return !course.terrain.Covers(q.x(), q.y()) || IsPenaltyArea(ref.at().LieAt(q.x(), q.y(), r));
       };
       std::vector<Vector2d> pts;
       pts.push_back(shot.start_m.head<2>());
@@ -876,7 +889,7 @@ absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& sett
             absl::StrFormat("back_m: must be in [0, %g] m; got %g", kBackMaxM, *choice.back_m));
       }
       distance = *choice.back_m;
-      if (!UsableBackOnTheLine(course, state.hole,
+      if (!UsableBackOnTheLine(ref.at(), state.hole,
                                BackOnTheLine(course, state.hole, d, distance, outside_bunker), r)) {
         return absl::InvalidArgumentError(absl::StrFormat(
             "back_m: the point %g m back on the line is out of bounds, in the area the relief is "
@@ -884,7 +897,7 @@ absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& sett
             distance));
       }
     } else {
-      distance = *DefaultBack(course, state.hole, d, outside_bunker, r);  // offered: it exists
+      distance = *DefaultBack(ref.at(), state.hole, d, outside_bunker, r);  // offered: it exists
     }
     relief = BackOnTheLine(course, state.hole, d, distance, outside_bunker);
   } else if (choice.choice == "lateral") {
