@@ -349,17 +349,20 @@ std::vector<CommandSpec> MakeSpecs() {
        {{"hole", "only this hole (1-based); --svg frames it"},
         {"svg", "the course from above: surfaces, elevation, tees and pins"}}},
       {"round", "create", "--players NAME,NAME",
-       "a round of golf on a course (stroke play); prints the seat tokens and the admin token",
+       "a round of golf on a course (stroke play, match play or Stableford, gross or net); "
+       "prints the seat tokens and the admin token",
        {{"course", "a course of `course list` (default sportsim_links)"},
         {"holes", "the holes played, A-B (default all of the course's)"},
         {"players", "the players' names in seat order, 1 to 8 (required)"},
         {"tees", "each player's tee by name, in seat order (default each hole's first)"},
-        {"play", "the form of play: stroke (gross; match play and Stableford: not yet)"},
-        {"handicaps", "handicap indexes (not yet: gross stroke play only)"},
+        {"play", "the form of play: stroke (default), match (two players) or stableford"},
+        {"handicaps", "each player's Handicap Index in seat order (World Handicap System; "
+                      "+2.1 or -2.1 is a plus handicap, - none): net scores by stroke index"},
         {"profile", "realistic (default: launches within a human's reach) or arcade"},
         {"noise", "the spread of launches and putts, [0, 5] (default 0)"},
         {"seed", "the seed of the noise and of drops (default 0)"},
-        {"rule", "a round variant: order=honour|ready (repeatable)"},
+        {"rule", "a round variant (repeatable): order=honour|ready; max_score=N|par+N|"
+                 "net_double_bogey (stroke play); allowance=PCT (handicap allowance)"},
         {"tick_hz", "ticks per second, [1, 240] (default 30)"},
         {"fast_forward", "each stroke comes to rest at the next tick (tests, bots)"},
         {"shot_clock", "round time the seat to play has, [0, 3600] s (default 0: none); when it "
@@ -393,9 +396,18 @@ std::vector<CommandSpec> MakeSpecs() {
        "a relief decision: a pending decision's choice, or unplayable on the seat's turn",
        {{"token", "the deciding seat's token"},
         {"choice", "stroke_and_distance, back_on_the_line, lateral, "
-                   "back_on_the_line_outside_bunker (as offered), or unplayable"},
+                   "back_on_the_line_outside_bunker (as offered), unplayable, pick_up, or "
+                   "match play's concede_stroke, concede_hole, concede_match"},
         {"back_m", "back_on_the_line: metres behind the reference point on the line from the "
                    "hole (default: the nearest point that leaves room to drop)"}}},
+      {"round", "concede", "ID --token T [--stroke | --hole | --match]",
+       "match play: concede the opponent's next stroke (the default; their ball is holed with "
+       "it), the hole or the match (Rule 3.2b: final once made)",
+       {{"token", "the conceding seat's token"}}},
+      {"round", "pickup", "ID --token T",
+       "pick up the seat's ball (Stableford: no score on the hole; stroke play with a maximum "
+       "score: the maximum)",
+       {{"token", "the seat's token"}}},
       {"round", "watch", "ID", "a round's events as they come",
        {{"rate", "snapshots per second at most while a ball moves (default: every tick)"},
         {"until_rest", "exit when the moving ball (or the next one) comes to rest"},
@@ -513,6 +525,13 @@ const std::vector<std::string>& RepeatedFlagValues(std::string_view name) {
   return it == Repeated().end() ? kNone : it->second;
 }
 
+std::vector<std::string>& WordFlagsGiven() {
+  static auto* words = new std::vector<std::string>();
+  return *words;
+}
+
+const std::vector<std::string>& WordFlags() { return WordFlagsGiven(); }
+
 std::optional<std::string> ParseArgs(int argc, char** argv, std::vector<std::string>* positional,
                                      HelpRequest* help) {
   bool flags_done = false;
@@ -549,6 +568,13 @@ std::optional<std::string> ParseArgs(int argc, char** argv, std::vector<std::str
       continue;
     }
     const std::string shown = Dashed(name);
+    // `round concede ID --stroke | --hole | --match`: words choosing what is conceded, not the
+    // golf commands' --hole N.
+    if (!has_value && positional->size() >= 2 && (*positional)[0] == "round" &&
+        (*positional)[1] == "concede" && (name == "stroke" || name == "hole" || name == "match")) {
+      WordFlagsGiven().push_back(name);
+      continue;
+    }
     if (const Repeatable* r = FindRepeatable(name)) {
       if (!has_value) {
         if (i + 1 >= argc) return shown + ": needs a value, " + std::string(r->meta);

@@ -38,6 +38,10 @@ enum class HelpRequest { kNone, kHelp, kHelpFull };
 std::optional<std::string> ParseArgs(int argc, char** argv, std::vector<std::string>* positional,
                                      HelpRequest* help);
 
+/// `round concede`'s words given (--stroke, --hole, --match), in order; outside `round concede`
+/// these names are ordinary flags.
+const std::vector<std::string>& WordFlags();
+
 /// The command's spec; null when there is none (an unknown command or subcommand).
 const CommandSpec* FindCommand(std::string_view command, std::string_view sub);
 

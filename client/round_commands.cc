@@ -55,8 +55,9 @@ ABSL_DECLARE_FLAG(double, club_path_deg);
 ABSL_FLAG(std::string, holes, "", "round create: the holes played, A-B (default all)");
 ABSL_FLAG(std::vector<std::string>, players, {}, "round create: the players' names, in seat order");
 ABSL_FLAG(std::vector<std::string>, tees, {}, "round create: each player's tee, in seat order");
-ABSL_FLAG(std::string, play, "stroke", "round create: the form of play (stroke)");
-ABSL_FLAG(std::vector<std::string>, handicaps, {}, "round create: handicap indexes (not yet)");
+ABSL_FLAG(std::string, play, "stroke", "round create: the form of play (stroke, match, stableford)");
+ABSL_FLAG(std::vector<std::string>, handicaps, {},
+          "round create: each player's Handicap Index in seat order (+X: a plus handicap; -: none)");
 ABSL_FLAG(bool, fast_forward, false, "round create: each stroke comes to rest at the next tick");
 ABSL_FLAG(std::optional<double>, back_m, std::nullopt,
           "round decide: back-on-the-line, metres behind the reference point");
@@ -92,14 +93,21 @@ std::string ToPar(int d) {
 void PrintRound(const v1::RoundState& r) {
   std::printf("%s, hole %u of %u-%u (par %u)", r.course().c_str(), r.hole(), r.first_hole(),
               r.last_hole(), r.par());
-  if (!r.result().empty()) {
+  if (!r.result().empty() && r.play() == "match") {
+    std::printf(": the match is over: %s\n", r.match_status().c_str());
+  } else if (!r.result().empty()) {
     std::string who;
     for (uint32_t w : r.winners()) {
       if (!who.empty()) who += " and ";
       who += r.players(w).name();
     }
-    std::printf(": the round is %s; %s %s with %u\n", r.result().c_str(), who.c_str(),
-                r.winners_size() > 1 ? "tie" : "wins", r.players(r.winners(0)).total());
+    const v1::RoundPlayerState& best = r.players(r.winners(0));
+    const std::string with =
+        r.play() == "stableford" ? absl::StrFormat("%u points", best.points_total())
+        : r.handicaps()          ? absl::StrFormat("net %d", best.net_total())
+                                 : absl::StrFormat("%u", best.total());
+    std::printf(": the round is %s; %s %s with %s\n", r.result().c_str(), who.c_str(),
+                r.winners_size() > 1 ? "tie" : "wins", with.c_str());
   } else if (r.stroke_in_play()) {
     std::printf(": a ball is moving\n");
   } else if (r.has_decision()) {
@@ -113,11 +121,14 @@ void PrintRound(const v1::RoundState& r) {
   } else {
     std::printf("\n");
   }
+  if (r.play() == "match" && r.result().empty()) std::printf("  match: %s\n", r.match_status().c_str());
   for (const v1::RoundPlayerState& p : r.players()) {
     const v1::RoundBall& b = p.ball();
     std::string ball;
     if (b.holed()) {
       ball = absl::StrFormat("holed in %u", p.strokes());
+    } else if (b.picked_up()) {
+      ball = absl::StrFormat("picked up after %u stroke%s", p.strokes(), p.strokes() == 1 ? "" : "s");
     } else {
       ball = absl::StrFormat("%u stroke%s, %.1f m (%.0f yd) from the pin, %s%s", p.strokes(),
                              p.strokes() == 1 ? "" : "s", b.distance_to_pin_m(),
@@ -132,6 +143,10 @@ void PrintRound(const v1::RoundState& r) {
                               [](uint32_t v) { return v > 0; }) == 1
                     ? ""
                     : "s");
+    if (r.handicaps()) {
+      std::printf("  %21s playing handicap %d, net %d\n", "", p.playing_handicap(), p.net_total());
+    }
+    if (r.play() == "stableford") std::printf("  %21s %u Stableford points\n", "", p.points_total());
   }
 }
 
@@ -166,13 +181,28 @@ int RunCreate(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
     p->set_name(players[i]);
     if (!tees.empty()) p->set_tee(tees[i]);
   }
-  if (const std::string play = absl::GetFlag(FLAGS_play); play != "stroke") {
-    return UsageError(InvalidValue(
-        "--play: this server plays stroke play (gross); match play and Stableford are not "
-        "available yet, got '" + play.substr(0, 20) + "'"));
+  const std::string play = absl::GetFlag(FLAGS_play);
+  if (play != "stroke" && play != "match" && play != "stableford") {
+    return UsageError(InvalidValue("--play must be stroke, match or stableford, got '" +
+                                   play.substr(0, 20) + "'"));
   }
-  if (!absl::GetFlag(FLAGS_handicaps).empty()) {
-    return UsageError(InvalidValue("--handicaps: handicaps are not available yet (gross stroke play)"));
+  request.set_play(play);
+  const std::vector<std::string> handicaps = absl::GetFlag(FLAGS_handicaps);
+  if (!handicaps.empty() && handicaps.size() != players.size()) {
+    return UsageError(absl::StrFormat("--handicaps needs one Handicap Index per player (%d), got %d",
+                                      players.size(), handicaps.size()));
+  }
+  for (size_t i = 0; i < handicaps.size(); ++i) {
+    const std::string& h = handicaps[i];
+    if (h == "-" || h == "none") continue;
+    double index = 0.0;
+    // A plus handicap is written +2.1; the World Handicap System stores it as -2.1.
+    const bool plus = !h.empty() && h[0] == '+';
+    if (!absl::SimpleAtod(plus ? h.substr(1) : h, &index) || !std::isfinite(index)) {
+      return UsageError(InvalidValue("--handicaps: '" + h.substr(0, 20) +
+                                     "' is not a Handicap Index (e.g. 12.4, +2.1, or - for none)"));
+    }
+    request.mutable_players(static_cast<int>(i))->set_handicap_index(plus ? -std::abs(index) : index);
   }
   const std::string profile = absl::GetFlag(FLAGS_profile);
   if (profile == "realistic") request.set_profile(v1::REALISM_PROFILE_REALISTIC);
@@ -225,11 +255,31 @@ int RunGet(const Context& ctx, Stub& stub, const std::vector<std::string>& args,
     std::printf("  total  par\n");
     for (const v1::RoundPlayerState& p : card.players()) {
       std::printf("%-12s", p.name().c_str());
-      for (uint32_t s : p.scores()) {
-        if (s == 0) std::printf("   -");
-        else std::printf(" %3u", s);
+      for (int h = 0; h < p.scores_size(); ++h) {
+        if (h < p.no_score_size() && p.no_score(h)) std::printf("   x");
+        else if (p.scores(h) == 0) std::printf("   -");
+        else std::printf(" %3u", p.scores(h));
       }
       std::printf("  %5u  %s\n", p.total(), ToPar(p.to_par()).c_str());
+      if (card.handicaps()) {
+        std::printf("%-12s", "  received");
+        for (int v : p.received()) std::printf(" %3d", v);
+        std::printf("  net %d (playing handicap %d)\n", p.net_total(), p.playing_handicap());
+      }
+      if (card.play() == "stableford") {
+        std::printf("%-12s", "  points");
+        for (uint32_t v : p.points()) std::printf(" %3u", v);
+        std::printf("  %5u\n", p.points_total());
+      }
+    }
+    if (card.play() == "match") {
+      std::printf("%-12s", "hole won by");
+      for (int w : card.hole_winners()) {
+        if (w == -2) std::printf("   -");
+        else if (w == -1) std::printf("   =");
+        else std::printf(" %3.3s", card.players(w).name().c_str());
+      }
+      std::printf("\n%s\n", card.match_status().c_str());
     }
   });
 }
@@ -345,6 +395,28 @@ int RunDecide(const Context& ctx, Stub& stub, const std::vector<std::string>& ar
   return Print(ctx, r, [&] { PrintRound(r.round()); });
 }
 
+// `round concede` (match play) and `round pickup`: the DecideRound choices that are not relief.
+int RunConcede(const Context& ctx, Stub& stub, const std::vector<std::string>& args, bool pickup) {
+  if (args.size() != 1) {
+    return UsageError(pickup ? "round pickup ID --token T"
+                             : "round concede ID --token T [--stroke | --hole | --match]");
+  }
+  v1::DecideRoundRequest request;
+  request.set_round_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  if (auto bad = Need(request.token(), pickup ? "round pickup (the seat's token)"
+                                              : "round concede (the conceding seat's token)")) {
+    return UsageError(*bad);
+  }
+  const std::vector<std::string>& words = WordFlags();
+  if (words.size() > 1) return UsageError("round concede takes one of --stroke, --hole, --match");
+  request.set_choice(pickup ? "pick_up" : "concede_" + (words.empty() ? std::string("stroke") : words[0]));
+  v1::DecideRoundResponse r;
+  const grpc::Status status = stub.DecideRound(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] { PrintRound(r.round()); });
+}
+
 int RunRecord(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
   if (args.size() != 1) return UsageError("round record ID");
   v1::GetRoundRecordRequest request;
@@ -430,7 +502,7 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
 
 int RunRound(const Context& ctx, const std::vector<std::string>& args) {
   static constexpr const char* kVerbs =
-      "create, list, get, delete, stroke, decide, watch, scorecard, record";
+      "create, list, get, delete, stroke, decide, concede, pickup, watch, scorecard, record";
   if (args.empty()) return UsageError(std::string("round needs a subcommand: ") + kVerbs);
   const std::string& verb = args[0];
   if (ctx.format == Format::kCsv) return UsageError("round " + verb + " has no csv form (json or text)");
@@ -443,6 +515,8 @@ int RunRound(const Context& ctx, const std::vector<std::string>& args) {
   if (verb == "delete") return RunDelete(ctx, *stub, rest);
   if (verb == "stroke") return RunStroke(ctx, *stub, rest);
   if (verb == "decide") return RunDecide(ctx, *stub, rest);
+  if (verb == "concede") return RunConcede(ctx, *stub, rest, false);
+  if (verb == "pickup") return RunConcede(ctx, *stub, rest, true);
   if (verb == "watch") return RunWatch(ctx, *stub, rest);
   if (verb == "record") return RunRecord(ctx, *stub, rest);
   return UsageError("unknown round subcommand '" + verb + "' (" + kVerbs + ")");

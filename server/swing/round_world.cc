@@ -4,6 +4,7 @@
 #include <cmath>
 #include <utility>
 
+#include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/match.h"
 #include "absl/strings/str_join.h"
@@ -122,7 +123,7 @@ void Refresh(Round& r) ABSL_EXCLUSIVE_LOCKS_REQUIRED(r.mu) {
 
 void RoundStateToProto(const golf::Course& course, const golf::RoundSettings& settings,
                        const golf::RoundState& st, bool stroke_in_play, v1::RoundState* out) {
-  out->set_play("stroke");
+  out->set_play(std::string(golf::PlayFormatName(settings.play)));
   out->set_course(course.name);
   out->set_first_hole(static_cast<uint32_t>(settings.first_hole));
   out->set_last_hole(static_cast<uint32_t>(settings.last_hole));
@@ -149,6 +150,12 @@ void RoundStateToProto(const golf::Course& course, const golf::RoundSettings& se
     ps->set_total(static_cast<uint32_t>(p.Total()));
     ps->set_to_par(p.Total() - par);
     ps->set_score(static_cast<uint32_t>(p.Total() + (st.over ? 0 : p.strokes)));
+    ps->set_playing_handicap(p.playing_handicap);
+    for (int v : p.received) ps->add_received(v);
+    for (bool v : p.no_score) ps->add_no_score(v);
+    ps->set_net_total(p.NetTotal());
+    for (int v : p.points) ps->add_points(static_cast<uint32_t>(v));
+    ps->set_points_total(static_cast<uint32_t>(p.Points()));
     v1::RoundBall* b = ps->mutable_ball();
     b->set_x_m(p.ball.position_m.x());
     b->set_y_m(p.ball.position_m.y());
@@ -156,6 +163,7 @@ void RoundStateToProto(const golf::Course& course, const golf::RoundSettings& se
     b->set_lie(std::string(golf::TerrainTag(p.ball.lie)));
     b->set_holed(p.ball.holed);
     b->set_marked(p.ball.marked);
+    b->set_picked_up(p.ball.picked_up);
     b->set_distance_to_pin_m(
         p.ball.holed ? 0.0 : (p.ball.position_m.head<2>() - *hole->pin_m).norm());
   }
@@ -180,6 +188,16 @@ void RoundStateToProto(const golf::Course& course, const golf::RoundSettings& se
   out->set_pin_x_m(pin.x());
   out->set_pin_y_m(pin.y());
   out->set_pin_z_m(course.terrain.HeightAt(pin.x(), pin.y()));
+  for (int w : st.hole_winners) out->add_hole_winners(w);
+  out->set_match_status(golf::MatchStatusText(settings, st));
+  switch (settings.max_score.kind) {
+    case golf::MaxScore::Kind::kFixed: out->set_max_score(absl::StrCat(settings.max_score.n)); break;
+    case golf::MaxScore::Kind::kParPlus: out->set_max_score(absl::StrCat("par+", settings.max_score.n)); break;
+    case golf::MaxScore::Kind::kNetDoubleBogey: out->set_max_score("net_double_bogey"); break;
+    case golf::MaxScore::Kind::kNone: break;
+  }
+  out->set_handicaps(std::any_of(settings.players.begin(), settings.players.end(),
+                                 [](const golf::RoundPlayerSpec& p) { return p.handicap_index.has_value(); }));
 }
 
 absl::StatusOr<golf::RoundSettings> RoundSettingsFromProto(const v1::CreateRoundRequest& r,
@@ -192,7 +210,19 @@ absl::StatusOr<golf::RoundSettings> RoundSettingsFromProto(const v1::CreateRound
     return absl::InvalidArgumentError(
         absl::StrFormat("players: a round has 1 to 8 players; got %d", r.players_size()));
   }
-  for (const v1::RoundPlayerSpec& p : r.players()) s.players.push_back({p.name(), p.tee()});
+  for (const v1::RoundPlayerSpec& p : r.players()) {
+    golf::RoundPlayerSpec& spec = s.players.emplace_back();
+    spec.name = p.name();
+    spec.tee = p.tee();
+    if (p.has_handicap_index()) spec.handicap_index = p.handicap_index();
+  }
+  if (r.play().size() > 32) return absl::InvalidArgumentError("play: stroke, match or stableford");
+  absl::StatusOr<golf::PlayFormat> play = golf::PlayFormatFromName(r.play());
+  if (!play.ok()) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("play: %s is not a form of play (stroke, match, stableford)", Quote(r.play())));
+  }
+  s.play = *play;
   switch (r.profile()) {
     case v1::REALISM_PROFILE_UNSPECIFIED:
     case v1::REALISM_PROFILE_REALISTIC: s.realism = golf::Realism::kRealistic; break;
@@ -489,6 +519,7 @@ absl::StatusOr<v1::ListRoundsResponse> RoundRegistry::List(const v1::ListRoundsR
         brief->set_hole(static_cast<uint32_t>(r.state.hole));
         for (const golf::RoundPlayer& p : r.state.players) brief->add_players(p.name);
         brief->set_result(r.state.result);
+        brief->set_play(std::string(golf::PlayFormatName(r.settings.play)));
         brief->set_tick(r.NowTick());
         brief->set_watchers(static_cast<uint32_t>(r.watchers.size()));
       });
@@ -650,7 +681,8 @@ absl::StatusOr<v1::DecideRoundResponse> RoundRegistry::DecideOn(Round& r, int se
   if (absl::Status s = CheckSeat(seat); !s.ok()) return s;
   if (absl::Status s = StrokeInPlay(r); !s.ok()) return s;
   if (request.choice().empty() || request.choice().size() > 64) {
-    return absl::InvalidArgumentError("choice: a choice of the pending decision, or \"unplayable\"");
+    return absl::InvalidArgumentError(
+        "choice: a choice of the pending decision, \"unplayable\", \"pick_up\" or a concession");
   }
   golf::RoundChoice choice{request.choice(), std::nullopt};
   if (request.has_back_m()) choice.back_m = request.back_m();

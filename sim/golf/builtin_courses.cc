@@ -175,6 +175,10 @@ Course MakeLinks() {
   h3.green_stimp_ft = 10.0;
   h3.fairway = "fairway_soft";
   c.holes = {h1, h2, h3};
+  // Ratings of the two tee sets over the three holes (par 12), set for this course as a rating
+  // committee would judge it (the creek, the pond and the raised greens make it harder than
+  // standard), not measured: they give handicaps something to act on.
+  c.ratings = {{"white", 128.0, 12.6}, {"red", 119.0, 12.1}};
 
   auto add = [&](Terrain t, int hole, std::vector<Vector2d> poly) {
     c.areas.push_back(CourseArea{.terrain = t, .hole = hole, .polygon = std::move(poly)});

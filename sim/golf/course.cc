@@ -248,6 +248,21 @@ const CourseHole* Course::Hole(int number) const {
   return &holes[static_cast<size_t>(number - 1)];
 }
 
+CourseRating Course::RatingOf(std::string_view tee) const {
+  std::string_view want = tee;
+  if (want.empty() && !holes.empty() && !holes.front().tees.empty()) want = holes.front().tees.front().name;
+  for (const CourseRating& r : ratings) {
+    if (r.tee == want) return r;
+  }
+  return CourseRating{std::string(want), 113.0, static_cast<double>(Par())};
+}
+
+int Course::Par() const {
+  int par = 0;
+  for (const CourseHole& h : holes) par += h.par;
+  return par;
+}
+
 bool Course::InBounds(double x, double y) const {
   if (!terrain.Covers(x, y)) return false;
   return boundary.empty() || InPolygon(boundary, x, y);
@@ -459,6 +474,24 @@ absl::Status ValidateCourse(const Course& c) {
   }
   if (c.holes.empty() || c.holes.size() > kMaxHoles) {
     return bad("holes: ", c.holes.size(), "; a course has 1 to ", kMaxHoles);
+  }
+  std::set<std::string> rated;
+  for (const CourseRating& r : c.ratings) {
+    const std::string what = absl::StrCat("rating of tee ", Q(r.tee));
+    bool known = false;
+    for (const CourseHole& hole : c.holes) {
+      for (const CourseTee& tee : hole.tees) known = known || tee.name == r.tee;
+    }
+    if (!known) return bad(what, ": no hole has a tee of that name");
+    if (!rated.insert(r.tee).second) return bad(what, ": given twice");
+    if (!(r.slope >= 55.0 && r.slope <= 155.0)) {
+      return bad(what, ": slope must be in [55, 155] (World Handicap System), got ", r.slope);
+    }
+    const double par = c.Par();
+    if (!(r.course_rating > 0.5 * par && r.course_rating < 1.5 * par)) {
+      return bad(what, ": course_rating must be between half and one and a half times the par (",
+                 par, "), got ", r.course_rating);
+    }
   }
   std::set<int> indexes;
   for (size_t k = 0; k < c.holes.size(); ++k) {
@@ -866,8 +899,23 @@ absl::StatusOr<Course> Parser::Parse() {
       (*hole)->tees.push_back(CourseTee{std::string(name.empty() ? "default" : name), points->front()});
       continue;
     }
+    if (e == "rating") {
+      auto tags = Tags(line, {"tee", "slope", "course_rating"});
+      if (!tags.ok()) return tags.status();
+      CourseRating rating;
+      rating.tee = std::string((*tags)["tee"]);
+      for (auto [k, out] : {std::pair{"slope", &rating.slope}, {"course_rating", &rating.course_rating}}) {
+        if (!tags->contains(k)) return Bad(line, k, " is required");
+        auto v = Number(line, k, (*tags)[k]);
+        if (!v.ok()) return v.status();
+        *out = *v;
+      }
+      if (course_.ratings.size() >= kMaxTees) return Bad(line, "more than ", kMaxTees, " ratings");
+      course_.ratings.push_back(std::move(rating));
+      continue;
+    }
     return Bad(line, "unknown element (course, description, air, wind, heightfield, z, surface, "
-                     "boundary, area, hole, tee, pin, line)");
+                     "boundary, area, hole, tee, pin, line, rating)");
   }
   if (!header) return absl::InvalidArgumentError("course: empty; it begins with 'sportsim-course 1'");
   if (!have_course) return absl::InvalidArgumentError("course: no course line");
@@ -928,6 +976,10 @@ std::string FormatCourse(const Course& c) {
       absl::StrAppend(&out, "wind ref=", hole.number, " speed_mps=", Num(hole.wind->speed_mps),
                       " toward_deg=", Num(hole.wind->toward_deg), "\n");
     }
+  }
+  for (const CourseRating& r : c.ratings) {
+    absl::StrAppend(&out, "rating tee=", r.tee, " slope=", Num(r.slope), " course_rating=",
+                    Num(r.course_rating), "\n");
   }
   if (!c.boundary.empty()) {
     out += "boundary";

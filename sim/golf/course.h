@@ -104,6 +104,14 @@ struct CourseTee {
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
 };
 
+/// A tee set's rating under the World Handicap System (the USGA/R&A course rating and slope,
+/// OpenStreetMap has no tag for them): over the course's holes played from tees of that name.
+struct CourseRating {
+  std::string tee;             ///< the tees' name (tee=*)
+  double slope = 113.0;        ///< [55, 155]; 113 is a course of standard difficulty
+  double course_rating = 0.0;  ///< a scratch golfer's expected score over the course's holes
+};
+
 struct CourseHole {
   int number = 1;        ///< 1..holes, in order
   int par = 4;           ///< [3, 6]
@@ -131,6 +139,9 @@ struct Course {
   std::vector<CourseArea> areas;   ///< painter's order (at most 100,000)
   Terrain base = Terrain::kRough;  ///< where no area is: rough, first_cut or fairway
   std::vector<CourseHole> holes;   ///< 1..36
+  /// Tee sets' ratings (at most one per tee name); a tee set without one rates as standard
+  /// (slope 113, course rating = the course's par).
+  std::vector<CourseRating> ratings;
   Atmosphere air;
   /// The course's wind; toward_deg is a heading in the course frame (ccw from +x), not
   /// relative to a target line as in a flight.
@@ -139,6 +150,10 @@ struct Course {
   std::array<std::optional<Surface>, kTerrainCount> surfaces;
 
   const CourseHole* Hole(int number) const;
+  /// The rating of the tees named `tee` ("" : each hole's first tee, rated as the first hole's
+  /// first tee's name); standard (slope 113, rating = par) when it has none.
+  CourseRating RatingOf(std::string_view tee) const;
+  int Par() const;  ///< the holes' par
   /// The class and hole of the surface under (x, y) (painter's order, boundary, base).
   struct Spot {
     Terrain terrain = Terrain::kRough;

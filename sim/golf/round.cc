@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <tuple>
 #include <utility>
 
+#include "absl/strings/match.h"
+#include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "absl/strings/str_join.h"
@@ -41,6 +44,8 @@ double Normal(uint64_t seed, Stream stream, uint64_t n) {  // Box-Muller on draw
   const double u1 = Uniform(seed, stream, 2 * n), u2 = Uniform(seed, stream, 2 * n + 1);
   return std::sqrt(-2.0 * std::log1p(-u1)) * std::cos(2.0 * std::numbers::pi * u2);
 }
+
+bool Done(const RoundBall& b) { return b.holed || b.picked_up; }
 
 // --- places -----------------------------------------------------------------------------------
 
@@ -323,35 +328,146 @@ class Referee {
     return Drop(seat, relief);
   }
 
+  // The ball is out of play for the rest of the hole without being holed.
+  void PickUp(int seat, std::string reason) {
+    RoundBall& b = player(seat).ball;
+    b.picked_up = true;
+    b.marked = false;
+    if (state().decision && state().decision->seat == seat) state().decision.reset();
+    RoundEvent& e = Emit(RoundEventKind::kPickedUp, seat);
+    e.reason = std::move(reason);
+    e.position_m = b.position_m;
+  }
+
+  int Par() const { return course_.Hole(step_.state.hole)->par; }
+  int Received(int seat) const {
+    const RoundPlayer& p = step_.state.players[seat];
+    return p.received[step_.state.hole - settings_.first_hole];
+  }
+
+  // The format's own ends of a player's hole: no Stableford point left to score (21.1c), the
+  // maximum score reached (21.2c), a match-play hole the player can no longer halve (3.2a).
+  void AutoPickUps() {
+    RoundState& st = state();
+    const int n = static_cast<int>(st.players.size());
+    for (int i = 0; i < n; ++i) {
+      const RoundPlayer& p = st.players[i];
+      if (Done(p.ball)) continue;
+      if (settings_.play == PlayFormat::kStableford && p.strokes >= Par() + Received(i) + 1) {
+        PickUp(i, "stableford");
+      } else if (settings_.play == PlayFormat::kStroke) {
+        const int max = MaxScoreOf(settings_.max_score, Par(), Received(i));
+        if (max > 0 && p.strokes >= max) PickUp(i, "max_score");
+      } else if (settings_.play == PlayFormat::kMatch) {
+        const RoundPlayer& o = st.players[1 - i];
+        if (o.ball.holed && p.strokes - Received(i) >= o.strokes - Received(1 - i)) {
+          PickUp(i, "decided");
+        }
+      }
+    }
+  }
+
+  // The hole's scores under the format, and match play's hole result.
+  void ScoreHole(int index) {
+    RoundState& st = state();
+    const int par = Par();
+    for (size_t i = 0; i < st.players.size(); ++i) {
+      RoundPlayer& p = st.players[i];
+      const int recv = p.received[index];
+      const int max = settings_.play == PlayFormat::kStroke ? MaxScoreOf(settings_.max_score, par, recv) : 0;
+      if (p.ball.holed) {
+        p.scores[index] = max > 0 ? std::min(p.strokes, max) : p.strokes;
+      } else if (max > 0) {
+        p.scores[index] = max;  // picked up at the maximum (21.2c)
+      } else {
+        p.scores[index] = 0;
+        p.no_score[index] = true;
+      }
+      if (settings_.play == PlayFormat::kStableford) {
+        p.points[index] = p.no_score[index] ? 0 : StablefordPoints(p.scores[index], par, recv);
+      }
+    }
+    if (settings_.play == PlayFormat::kMatch && st.hole_winners[index] == -2) {
+      // The fewer net strokes wins the hole (3.2a(1)); a ball not holed loses to one holed.
+      auto net = [&](int seat) {
+        const RoundPlayer& p = st.players[seat];
+        return p.no_score[index] ? std::numeric_limits<int>::max() : p.scores[index] - p.received[index];
+      };
+      const int a = net(0), b = net(1);
+      st.hole_winners[index] = a < b ? 0 : (b < a ? 1 : -1);
+    }
+  }
+
+  void EndRound(std::string result, std::vector<int> winners) {
+    RoundState& st = state();
+    st.over = true;
+    st.result = std::move(result);
+    st.winners = std::move(winners);
+    Emit(RoundEventKind::kRoundEnd, -1);
+  }
+
+  // The round's winners when its last hole is complete: the lowest total (net with handicaps),
+  // the most points.
+  std::vector<int> Leaders() const {
+    const RoundState& st = step_.state;
+    const bool net = std::any_of(settings_.players.begin(), settings_.players.end(),
+                                 [](const RoundPlayerSpec& p) { return p.handicap_index.has_value(); });
+    std::vector<int> out;
+    int best = 0;
+    for (size_t i = 0; i < st.players.size(); ++i) {
+      const RoundPlayer& p = st.players[i];
+      // Lower is better: strokes, or points negated.
+      const int t = settings_.play == PlayFormat::kStableford ? -p.Points()
+                                                               : (net ? p.NetTotal() : p.Total());
+      if (i == 0 || t < best) {
+        best = t;
+        out.clear();
+      }
+      if (t == best) out.push_back(static_cast<int>(i));
+    }
+    return out;
+  }
+
   // After a ball has moved: the hole's end, the round's, and the marks on the green.
   void Settle() {
     RoundState& st = state();
-    const bool all_holed = std::all_of(st.players.begin(), st.players.end(),
-                                       [](const RoundPlayer& p) { return p.ball.holed; });
-    if (all_holed && !st.decision) {
+    AutoPickUps();
+    const bool all_done = std::all_of(st.players.begin(), st.players.end(),
+                                      [](const RoundPlayer& p) { return Done(p.ball); });
+    if (all_done && !st.decision) {
       const int index = st.hole - settings_.first_hole;
-      for (RoundPlayer& p : st.players) p.scores[index] = p.strokes;
+      ScoreHole(index);
       Emit(RoundEventKind::kHoleEnd, -1);
-      if (st.hole == settings_.last_hole) {
-        st.over = true;
-        st.result = "finished";
-        int best = 0;
-        for (size_t i = 0; i < st.players.size(); ++i) {
-          const int t = st.players[i].Total();
-          if (i == 0 || t < best) {
-            best = t;
-            st.winners.clear();
-          }
-          if (t == best) st.winners.push_back(static_cast<int>(i));
+      if (settings_.play == PlayFormat::kMatch) {
+        // Rule 3.2a(3): won when one side leads by more holes than are left to play.
+        const MatchStatus m = MatchStatusOf(settings_, st);
+        if (m.leader >= 0 && m.up > m.to_play) {
+          EndRound(m.to_play == 0 ? absl::StrCat(m.up, " up") : absl::StrCat(m.up, " and ", m.to_play),
+                   {m.leader});
+          return;
         }
-        Emit(RoundEventKind::kRoundEnd, -1);
+        if (m.to_play == 0) {
+          EndRound("halved", {0, 1});
+          return;
+        }
+      } else if (st.hole == settings_.last_hole) {
+        EndRound("finished", Leaders());
         return;
       }
-      // Rule 6.4a(2): the lowest score on the hole has the honour on the next; ties keep the
-      // order they teed off in.
-      std::stable_sort(st.tee_order.begin(), st.tee_order.end(), [&](int a, int b) {
-        return st.players[a].scores[index] < st.players[b].scores[index];
-      });
+      // Rule 6.4a(2): in match play the winner of a hole has the honour on the next (a halved
+      // hole keeps it); in stroke play the lowest score, ties keeping the order they teed off in
+      // (a ball without a score goes last).
+      if (settings_.play == PlayFormat::kMatch) {
+        const int w = st.hole_winners[index];
+        if (w >= 0) st.tee_order = {w, 1 - w};
+      } else {
+        auto key = [&](int seat) {
+          const RoundPlayer& p = st.players[seat];
+          return p.no_score[index] ? std::numeric_limits<int>::max() : p.scores[index];
+        };
+        std::stable_sort(st.tee_order.begin(), st.tee_order.end(),
+                         [&](int a, int b) { return key(a) < key(b); });
+      }
       ++st.hole;
       for (size_t i = 0; i < st.players.size(); ++i) SendToTee(static_cast<int>(i));
     }
@@ -359,7 +475,7 @@ class Referee {
     for (size_t i = 0; i < st.players.size(); ++i) {
       RoundBall& b = st.players[i].ball;
       const bool on_green =
-          !b.holed && AreaAt(at_, st.hole, b.position_m.head<2>(), r()) == CourseAreaKind::kGreen;
+          !Done(b) && AreaAt(at_, st.hole, b.position_m.head<2>(), r()) == CourseAreaKind::kGreen;
       const bool mark = on_green && static_cast<int>(i) != next;
       if (mark != b.marked) {
         b.marked = mark;
@@ -450,6 +566,10 @@ absl::Status CheckTurn(const Course& course, const RoundSettings& settings,
     return absl::FailedPreconditionError(
         absl::StrFormat("%s's ball is holed on hole %d (Rule 13.2c)", state.players[seat].name, state.hole));
   }
+  if (state.players[seat].ball.picked_up) {
+    return absl::FailedPreconditionError(absl::StrFormat(
+        "%s's ball is picked up on hole %d: the hole is over for them", state.players[seat].name, state.hole));
+  }
   const std::vector<int> may = MayPlay(course, settings, state);
   if (std::find(may.begin(), may.end(), seat) != may.end()) return absl::OkStatus();
   const int next = ToPlay(course, settings, state);
@@ -497,6 +617,23 @@ absl::Status CheckRealistic(const RoundStroke& s) {
 
 std::string_view OrderOfPlayName(OrderOfPlay o) { return o == OrderOfPlay::kReady ? "ready" : "honour"; }
 
+std::string_view PlayFormatName(PlayFormat p) {
+  switch (p) {
+    case PlayFormat::kMatch: return "match";
+    case PlayFormat::kStableford: return "stableford";
+    case PlayFormat::kStroke: break;
+  }
+  return "stroke";
+}
+
+absl::StatusOr<PlayFormat> PlayFormatFromName(std::string_view name) {
+  if (name == "stroke" || name.empty()) return PlayFormat::kStroke;
+  if (name == "match") return PlayFormat::kMatch;
+  if (name == "stableford") return PlayFormat::kStableford;
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "play: \"%s\" is not a form of play (stroke, match, stableford)", name.substr(0, 24)));
+}
+
 std::string_view RealismName(Realism r) { return r == Realism::kArcade ? "arcade" : "realistic"; }
 
 absl::StatusOr<Realism> RealismFromName(std::string_view name) {
@@ -529,6 +666,8 @@ std::string_view RoundEventName(RoundEventKind kind) {
     case RoundEventKind::kPlaced: return "placed";
     case RoundEventKind::kMarked: return "marked";
     case RoundEventKind::kReplaced: return "replaced";
+    case RoundEventKind::kConceded: return "conceded";
+    case RoundEventKind::kPickedUp: return "picked_up";
     case RoundEventKind::kHoleEnd: return "hole_end";
     case RoundEventKind::kRoundEnd: return "round_end";
   }
@@ -539,6 +678,81 @@ int RoundPlayer::Total() const {
   int t = 0;
   for (int s : scores) t += s;
   return t;
+}
+
+int RoundPlayer::NetTotal() const {
+  int t = 0;
+  for (size_t h = 0; h < scores.size(); ++h) {
+    if (scores[h] > 0) t += scores[h] - received[h];
+  }
+  return t;
+}
+
+int RoundPlayer::Points() const {
+  int t = 0;
+  for (int p : points) t += p;
+  return t;
+}
+
+// --- handicaps and scores ---------------------------------------------------------------------
+
+double CourseHandicap(const Course& course, std::string_view tee, double handicap_index) {
+  const CourseRating r = course.RatingOf(tee);
+  const double scale = static_cast<double>(course.holes.size()) / 18.0;
+  return handicap_index * scale * r.slope / 113.0 + (r.course_rating - course.Par());
+}
+
+int StrokesReceived(int playing_handicap, int stroke_index, int holes) {
+  if (holes <= 0) return 0;
+  if (playing_handicap >= 0) {
+    return playing_handicap / holes + (stroke_index <= playing_handicap % holes ? 1 : 0);
+  }
+  const int back = -playing_handicap;
+  return -(back / holes + (stroke_index > holes - back % holes ? 1 : 0));
+}
+
+int StablefordPoints(int gross, int par, int received) {
+  return std::max(0, 2 + par + received - gross);
+}
+
+int MaxScoreOf(const MaxScore& max, int par, int received) {
+  switch (max.kind) {
+    case MaxScore::Kind::kFixed: return max.n;
+    case MaxScore::Kind::kParPlus: return par + max.n;
+    case MaxScore::Kind::kNetDoubleBogey: return par + 2 + received;
+    case MaxScore::Kind::kNone: break;
+  }
+  return 0;
+}
+
+MatchStatus MatchStatusOf(const RoundSettings& settings, const RoundState& state) {
+  MatchStatus m;
+  if (settings.play != PlayFormat::kMatch) return m;
+  int won[2] = {0, 0};
+  for (int w : state.hole_winners) {
+    if (w >= 0) ++won[w];
+    if (w == -2) ++m.to_play;
+  }
+  if (won[0] != won[1]) {
+    m.leader = won[0] > won[1] ? 0 : 1;
+    m.up = std::abs(won[0] - won[1]);
+  }
+  m.dormie = !state.over && m.up > 0 && m.up == m.to_play;
+  return m;
+}
+
+std::string MatchStatusText(const RoundSettings& settings, const RoundState& state) {
+  if (settings.play != PlayFormat::kMatch || state.players.size() != 2) return "";
+  const MatchStatus m = MatchStatusOf(settings, state);
+  if (state.over) {
+    if (state.winners.size() != 1) return "halved";
+    const std::string& who = state.players[state.winners.front()].name;
+    if (state.result == "conceded") return absl::StrCat(who, " won (the match was conceded)");
+    return absl::StrCat(who, " won ", state.result);
+  }
+  if (m.leader < 0) return absl::StrCat("all square with ", m.to_play, " to play");
+  return absl::StrCat(state.players[m.leader].name, " ", m.up, " up with ", m.to_play, " to play",
+                      m.dormie ? " (dormie)" : "");
 }
 
 // --- settings ---------------------------------------------------------------------------------
@@ -577,6 +791,26 @@ absl::Status ValidateRoundSettings(const Course& course, const RoundSettings& s)
           s.first_hole, s.last_hole));
     }
   }
+  for (size_t i = 0; i < s.players.size(); ++i) {
+    const std::optional<double>& h = s.players[i].handicap_index;
+    if (h && !(*h >= -10.0 && *h <= 54.0)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "players[%d].handicap_index: a Handicap Index is from +10 (-10) to 54; got %g", i, *h));
+    }
+  }
+  if (s.play == PlayFormat::kMatch && s.players.size() != 2) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "players: match play is between two players (Rule 3.2); got %d", s.players.size()));
+  }
+  if (s.max_score.kind != MaxScore::Kind::kNone && s.play != PlayFormat::kStroke) {
+    return absl::InvalidArgumentError(
+        "rules: max_score is a form of stroke play (Rule 21.2); Stableford and match play end a "
+        "hole their own way");
+  }
+  if (s.allowance_pct && !(*s.allowance_pct >= 0.0 && *s.allowance_pct <= 100.0)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("rules: allowance must be in [0, 100] %%; got %g", *s.allowance_pct));
+  }
   if (!std::isfinite(s.noise) || s.noise < 0.0 || s.noise > 5.0) {
     return absl::InvalidArgumentError(absl::StrFormat("noise: must be in [0, 5]; got %g", s.noise));
   }
@@ -595,8 +829,37 @@ absl::Status SetRoundVariant(std::string_view name, std::string_view value, Roun
     }
     return absl::OkStatus();
   }
-  return absl::InvalidArgumentError(
-      absl::StrFormat("rule \"%s\" is not a rule of a round (order)", name.substr(0, 24)));
+  if (name == "max_score") {
+    MaxScore m;
+    int n = 0;
+    if (value == "none") {
+      m.kind = MaxScore::Kind::kNone;
+    } else if (value == "net_double_bogey") {
+      m.kind = MaxScore::Kind::kNetDoubleBogey;
+    } else if (value.starts_with("par+") && absl::SimpleAtoi(std::string(value.substr(4)), &n) &&
+               n >= 1 && n <= 10) {
+      m = {MaxScore::Kind::kParPlus, n};
+    } else if (absl::SimpleAtoi(std::string(value), &n) && n >= 3 && n <= 20) {
+      m = {MaxScore::Kind::kFixed, n};
+    } else {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "rule max_score must be a number of strokes (3-20), par+N (1-10), net_double_bogey or "
+          "none; got \"%s\"", value.substr(0, 24)));
+    }
+    settings->max_score = m;
+    return absl::OkStatus();
+  }
+  if (name == "allowance") {
+    double pct = 0.0;
+    if (!absl::SimpleAtod(std::string(value), &pct) || !(pct >= 0.0 && pct <= 100.0)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "rule allowance must be a percentage in [0, 100]; got \"%s\"", value.substr(0, 24)));
+    }
+    settings->allowance_pct = pct;
+    return absl::OkStatus();
+  }
+  return absl::InvalidArgumentError(absl::StrFormat(
+      "rule \"%s\" is not a rule of a round (order, max_score, allowance)", name.substr(0, 24)));
 }
 
 // --- areas ------------------------------------------------------------------------------------
@@ -617,7 +880,32 @@ absl::StatusOr<RoundState> StartRound(const Course& course, const RoundSettings&
     p.name = settings.players[i].name;
     p.tee = settings.players[i].tee;
     p.scores.assign(holes, 0);
+    p.no_score.assign(holes, false);
+    p.points.assign(holes, 0);
     st.tee_order.push_back(static_cast<int>(i));
+  }
+  // Playing handicaps (Rules of Handicapping 6.2): the unrounded course handicap times the
+  // allowance, rounded (.5 up); in match play the lower plays off scratch and the other
+  // receives the difference (Appendix C).
+  const double allowance =
+      settings.allowance_pct ? *settings.allowance_pct / 100.0
+                             : (settings.play == PlayFormat::kMatch ? 1.0 : 0.95);
+  for (size_t i = 0; i < settings.players.size(); ++i) {
+    const RoundPlayerSpec& spec = settings.players[i];
+    if (!spec.handicap_index) continue;
+    st.players[i].playing_handicap = static_cast<int>(
+        std::floor(CourseHandicap(course, spec.tee, *spec.handicap_index) * allowance + 0.5));
+  }
+  if (settings.play == PlayFormat::kMatch) {
+    const int low = std::min(st.players[0].playing_handicap, st.players[1].playing_handicap);
+    for (RoundPlayer& p : st.players) p.playing_handicap -= low;
+    st.hole_winners.assign(holes, -2);
+  }
+  const int course_holes = static_cast<int>(course.holes.size());
+  for (RoundPlayer& p : st.players) {
+    for (int h = settings.first_hole; h <= settings.last_hole; ++h) {
+      p.received.push_back(StrokesReceived(p.playing_handicap, course.Hole(h)->stroke_index, course_holes));
+    }
   }
   static const std::function<bool()> kNever;
   Referee ref(course, settings, st, kNever);
@@ -631,13 +919,13 @@ int ToPlay(const Course& course, const RoundSettings& settings, const RoundState
   if (state.decision) return state.decision->seat;
   for (int seat : state.tee_order) {
     const RoundPlayer& p = state.players[seat];
-    if (!p.ball.holed && p.strokes == 0) return seat;
+    if (!Done(p.ball) && p.strokes == 0) return seat;
   }
   int best = -1;
   double far = -1.0;
   for (size_t i = 0; i < state.players.size(); ++i) {
     const RoundPlayer& p = state.players[i];
-    if (p.ball.holed) continue;
+    if (Done(p.ball)) continue;
     const double d = ToPin(course, state.hole, p.ball.position_m);
     if (d > far) {
       far = d;
@@ -656,7 +944,7 @@ std::vector<int> MayPlay(const Course& course, const RoundSettings& settings,
   }
   std::vector<int> out;
   for (size_t i = 0; i < state.players.size(); ++i) {
-    if (!state.players[i].ball.holed) out.push_back(static_cast<int>(i));
+    if (!Done(state.players[i].ball)) out.push_back(static_cast<int>(i));
   }
   return out;
 }
@@ -816,6 +1104,7 @@ absl::StatusOr<RoundStep> ShotClockExpired(const Course& course, const RoundSett
   static const std::function<bool()> kNever;
   Referee ref(course, settings, state, kNever);
   ref.Penalty(seat, 1, "shot_clock", "5.6b");
+  ref.Settle();  // the penalty may reach a format's end of the hole (a maximum score)
   return ref.Take();
 }
 
@@ -845,6 +1134,79 @@ absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& sett
   if (state.over) return absl::FailedPreconditionError("the round is over");
   Referee ref(course, settings, state, cancelled);
   const double r = ref.r();
+  if (choice.choice == "pick_up") {
+    if (settings.play == PlayFormat::kMatch) {
+      return absl::FailedPreconditionError(
+          "in match play a player who picks up concedes the hole: concede_hole (Rule 3.2b)");
+    }
+    if (settings.play == PlayFormat::kStroke && settings.max_score.kind == MaxScore::Kind::kNone) {
+      return absl::FailedPreconditionError(
+          "in stroke play every hole is holed out (Rule 3.3c); picking up is for Stableford "
+          "(21.1c) or a maximum score (21.2c, rule max_score)");
+    }
+    // At any time while the seat's ball is in play (not only on its turn: lifting it affects
+    // no one's play), a pending relief decision of its own included.
+    const RoundBall& ball = state.players[seat].ball;
+    if (Done(ball)) {
+      return absl::FailedPreconditionError(absl::StrFormat(
+          "%s's hole is over: the ball is %s", state.players[seat].name, ball.holed ? "holed" : "picked up"));
+    }
+    if (state.players[seat].strokes == 0) {
+      return absl::FailedPreconditionError(
+          "no ball in play: a ball is in play once it has been struck from the teeing area (Rule 6.2)");
+    }
+    ref.PickUp(seat, "pick_up");
+    ref.Settle();
+    return ref.Take();
+  }
+  if (absl::StartsWith(choice.choice, "concede_")) {
+    if (settings.play != PlayFormat::kMatch) {
+      return absl::FailedPreconditionError("concessions are match play's (Rule 3.2b)");
+    }
+    const std::string& what = choice.choice;
+    if (what != "concede_stroke" && what != "concede_hole" && what != "concede_match") {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "choice: \"%s\" is not a concession (concede_stroke, concede_hole, concede_match)",
+          what.substr(0, 24)));
+    }
+    const int opp = 1 - seat;
+    const RoundPlayer& o = state.players[opp];
+    if (what == "concede_stroke") {
+      if (Done(o.ball)) {
+        return absl::FailedPreconditionError(absl::StrFormat(
+            "%s's hole is over: there is no next stroke to concede", o.name));
+      }
+      if (state.decision && state.decision->seat == opp) {
+        return absl::FailedPreconditionError(absl::StrFormat(
+            "%s has a relief decision pending: their next stroke comes after it (concede the hole "
+            "instead)", o.name));
+      }
+    }
+    RoundEvent& e = ref.Emit(RoundEventKind::kConceded, seat);
+    e.choice = what;
+    e.rule = "3.2b";
+    if (what == "concede_match") {
+      ref.EndRound("conceded", {opp});
+      return ref.Take();
+    }
+    if (what == "concede_stroke") {
+      // The opponent's ball is holed with their next stroke (3.2b(1)).
+      RoundPlayer& op = ref.player(opp);
+      ++op.strokes;
+      op.ball.holed = true;
+      op.ball.marked = false;
+      op.ball.position_m = OnGround(course, Pin(course, state.hole));
+      ref.Emit(RoundEventKind::kHoled, opp).position_m = op.ball.position_m;
+    } else {
+      ref.state().hole_winners[state.hole - settings.first_hole] = opp;
+      for (int i : {seat, opp}) {
+        if (!Done(ref.player(i).ball)) ref.PickUp(i, "conceded");
+      }
+      ref.state().decision.reset();
+    }
+    ref.Settle();
+    return ref.Take();
+  }
   if (choice.choice == "unplayable") {
     if (absl::Status s = CheckTurn(course, settings, state, seat); !s.ok()) return s;
     const RoundPlayer& p = state.players[seat];

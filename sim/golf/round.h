@@ -66,15 +66,40 @@ struct RoundLimits {
 };
 inline constexpr RoundLimits kRoundLimits{};
 
+/// The form of play (Rules 3 and 21): stroke play (3.3, the fewest strokes; with a maximum
+/// score per hole, 21.2), match play (3.2, two players, hole by hole) or Stableford (21.1,
+/// points against par per hole).
+enum class PlayFormat : uint8_t { kStroke, kMatch, kStableford };
+std::string_view PlayFormatName(PlayFormat p);  ///< "stroke", "match", "stableford"
+absl::StatusOr<PlayFormat> PlayFormatFromName(std::string_view name);
+
+/// Stroke play's maximum score per hole (Rule 21.2b: set by the Committee): none, a number, par
+/// plus a number, or net double bogey (par + 2 + the strokes the player receives there, the
+/// World Handicap System's cap).
+struct MaxScore {
+  enum class Kind : uint8_t { kNone, kFixed, kParPlus, kNetDoubleBogey };
+  Kind kind = Kind::kNone;
+  int n = 0;
+};
+
 struct RoundPlayerSpec {
   std::string name;  ///< 1-40 printable characters
   std::string tee;   ///< a tee name of the holes ("" = each hole's first tee)
+  /// The World Handicap System's Handicap Index, [-10, 54] (a "plus" handicap is negative);
+  /// unset: the player plays off scratch (no strokes received).
+  std::optional<double> handicap_index;
 };
 
 /// The round's settings, fixed at creation.
 struct RoundSettings {
   int first_hole = 1, last_hole = 1;   ///< the holes played, in order (of the course's)
-  std::vector<RoundPlayerSpec> players;  ///< 1-8
+  std::vector<RoundPlayerSpec> players;  ///< 1-8 (match play: 2)
+  PlayFormat play = PlayFormat::kStroke;
+  MaxScore max_score;  ///< stroke play only
+  /// The handicap allowance (%, World Handicap System Appendix C) that turns a course handicap
+  /// into a playing handicap; unset: the recommended one for the format (individual stroke
+  /// play and Stableford 95 %, singles match play 100 %).
+  std::optional<double> allowance_pct;
   OrderOfPlay order = OrderOfPlay::kHonour;
   Realism realism = Realism::kRealistic;
   /// The spread of launches and putts, 0 (none) to 5: at 1 a launch's speed has a standard
@@ -89,7 +114,8 @@ struct RoundSettings {
 /// names, each player's tee a tee of some hole played, noise in [0, 5]. InvalidArgument names
 /// the field.
 absl::Status ValidateRoundSettings(const Course& course, const RoundSettings& settings);
-/// Sets a `--rule NAME=VALUE` of a round: order=honour|ready.
+/// Sets a `--rule NAME=VALUE` of a round: order=honour|ready; max_score=N|par+N|
+/// net_double_bogey|none (stroke play); allowance=PCT (0-100, the handicap allowance).
 absl::Status SetRoundVariant(std::string_view name, std::string_view value, RoundSettings* settings);
 
 /// The areas of the course (Rule 2.2).
@@ -102,6 +128,9 @@ struct RoundBall {
   bool holed = false;
   /// On the putting green and lifted (its spot marked) while another player plays (13.1b).
   bool marked = false;
+  /// Picked up: out of play for the rest of the hole without being holed (Stableford when no
+  /// point is left to score, a maximum score reached, a hole decided in match play).
+  bool picked_up = false;
   /// Where the last stroke was made from and the lie there (stroke and distance, 14.6); before
   /// the first stroke of a hole, the tee.
   Eigen::Vector3d last_spot_m = Eigen::Vector3d::Zero();
@@ -114,10 +143,35 @@ struct RoundPlayer {
   int strokes = 0;    ///< on the current hole, penalty strokes included
   int penalties = 0;  ///< the penalty strokes among them
   RoundBall ball;
-  /// Per hole of the round (index 0 = first_hole): the score, 0 while not yet completed.
+  /// Per hole of the round (index 0 = first_hole): the gross score, 0 while not yet completed
+  /// or with no score (a ball picked up in Stableford or match play: `no_score`); in stroke
+  /// play with a maximum score, at most the maximum.
   std::vector<int> scores;
-  int Total() const;  ///< the completed holes' sum
+  std::vector<bool> no_score;  ///< per hole: completed without a score
+  /// The playing handicap (World Handicap System: the course handicap times the allowance,
+  /// rounded; in match play the difference from the lower player's), and the strokes it
+  /// gives on each hole of the round by stroke index (negative: a plus handicap gives back).
+  int playing_handicap = 0;
+  std::vector<int> received;
+  std::vector<int> points;  ///< Stableford: per hole (Rule 21.1b), 0 until completed
+  int Total() const;        ///< the completed holes' gross sum
+  int NetTotal() const;     ///< Total less the strokes received on the holes with a score
+  int Points() const;       ///< the Stableford points' sum
 };
+
+/// World Handicap System (Rules of Handicapping 6.1): the course handicap of a Handicap Index
+/// from the tee set's rating, index x slope / 113 + (course rating - par), scaled from 18 holes
+/// to the course's holes (a 9-hole course takes half the index, as Rule 6.1b does); unrounded.
+double CourseHandicap(const Course& course, std::string_view tee, double handicap_index);
+/// The strokes a playing handicap gives on a hole of stroke index `stroke_index` of `holes`
+/// (Rule of Handicapping 6.2 / Appendix E): one on each hole in stroke index order, round and
+/// round again; a plus handicap gives strokes back from the highest index down.
+int StrokesReceived(int playing_handicap, int stroke_index, int holes);
+/// Stableford points (Rule 21.1b): 2 at the fixed score (par, less the strokes received), one
+/// more for each stroke under, one less for each over, never below 0.
+int StablefordPoints(int gross, int par, int received);
+/// The maximum score of a hole for a player (0: none).
+int MaxScoreOf(const MaxScore& max, int par, int received);
 
 /// A relief decision the seat must make before anyone plays on.
 struct RoundDecision {
@@ -141,10 +195,14 @@ struct RoundState {
   std::vector<int> tee_order;
   std::optional<RoundDecision> decision;
   bool over = false;
-  /// When over: "finished" (all holes holed out); "" before.
+  /// When over: "finished" (stroke play and Stableford: all holes played out); in match play
+  /// "3 and 2", "1 up", "halved" or "conceded"; "" before.
   std::string result;
-  /// When over: the seats with the lowest total, ascending (several: a tie).
+  /// When over: the seats with the lowest total (net with handicaps), the most Stableford
+  /// points, or the match's winner, ascending (several: a tie or a halved match).
   std::vector<int> winners;
+  /// Match play, per hole of the round: the seat that won it, -1 halved, -2 not yet completed.
+  std::vector<int> hole_winners;
   uint64_t draws = 0;   ///< seeded draws made so far
   int64_t strokes = 0;  ///< strokes the round has played (all players)
 };
@@ -160,11 +218,13 @@ enum class RoundEventKind : uint8_t {
   kPlaced,     ///< the ball was placed (position_m): after two failed drops, or on its spot
   kMarked,     ///< the ball on the green was marked and lifted
   kReplaced,   ///< and replaced for its owner's turn
+  kConceded,   ///< match play: a concession (choice: concede_stroke, concede_hole, concede_match)
+  kPickedUp,   ///< the ball was picked up (reason: stableford, max_score, decided, pick_up)
   kHoleEnd,    ///< the hole is complete (scores in the state)
   kRoundEnd,   ///< the round is over (result, winners in the state)
 };
 /// "stroke", "holed", "rest", "penalty", "decision", "choice", "drop", "placed", "marked",
-/// "replaced", "hole_end", "round_end".
+/// "replaced", "conceded", "picked_up", "hole_end", "round_end".
 std::string_view RoundEventName(RoundEventKind kind);
 
 struct RoundEvent {
@@ -253,6 +313,10 @@ absl::StatusOr<RoundStep> PlayStroke(const Course& course, const RoundSettings& 
 /// A seat's relief decision: one of the pending decision's choices (the penalty counted, the
 /// ball dropped or placed where the Rule says), or "unplayable" when it is the seat's turn and
 /// no decision is pending (Rule 19.1: anywhere but in a penalty area; it opens a decision).
+/// Also, not relief: "pick_up" while the seat's ball is in play (Stableford, 21.1c: no score;
+/// stroke play with a maximum score, 21.2c: the maximum); and in match play, at any time the ball is not
+/// moving, "concede_stroke" (the opponent's next stroke: their ball is holed with it),
+/// "concede_hole" or "concede_match" (Rule 3.2b: final once made).
 /// FailedPrecondition names the Rule when the seat may not decide now; InvalidArgument names
 /// the choice when it is not one of the offered.
 absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& settings,
@@ -264,6 +328,18 @@ absl::StatusOr<RoundStep> Decide(const Course& course, const RoundSettings& sett
 /// set one; "shot_clock", rule "5.6b"). FailedPrecondition when the round is over.
 absl::StatusOr<RoundStep> ShotClockExpired(const Course& course, const RoundSettings& settings,
                                            const RoundState& state);
+
+/// Match play's state: the seat ahead (-1: all square), by how many holes, with how many to
+/// play, and "dormie" (as many up as are left).
+struct MatchStatus {
+  int leader = -1;
+  int up = 0;
+  int to_play = 0;
+  bool dormie = false;
+};
+MatchStatus MatchStatusOf(const RoundSettings& settings, const RoundState& state);
+/// "all square with 3 to play", "Ann 2 up with 1 to play (dormie)", "Ann won 3 and 2".
+std::string MatchStatusText(const RoundSettings& settings, const RoundState& state);
 
 /// The area of the course (Rule 2.2) of a lie at a spot, for the hole being played: tees and
 /// greens of other holes are general area.

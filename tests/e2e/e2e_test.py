@@ -240,9 +240,63 @@ class CliAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         r = cli(a, "round", "create", "--players", "Ann", "--play", "match")
         self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("two players", r.stderr)
+        r = cli(a, "round", "create", "--players", "Ann", "--play", "skins")
+        self.assertEqual(r.returncode, 3, r.stderr)
         self.assertIn("--play", r.stderr)
         r = cli(a, "round", "create")
         self.assertEqual(r.returncode, 64, r.stderr)
+
+    def test_round_match_play_with_handicaps_and_concessions(self):
+        a = self.server.address
+        r = cli(a, "--format", "json", "round", "create", "--players", "Ann,Bob", "--play",
+                "match", "--handicaps", "3.2,+1.5", "--fast-forward")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        made = json.loads(r.stdout)
+        rid, ann, bob = made["round_id"], made["seats"][0]["token"], made["seats"][1]["token"]
+        state = made["round"]
+        self.assertEqual(state["play"], "match")
+        self.assertTrue(state["handicaps"])
+        # Ann's index is the higher: she receives the difference, Bob plays off scratch.
+        self.assertGreater(state["players"][0]["playing_handicap"], 0)
+        self.assertEqual(state["players"][1].get("playing_handicap", 0), 0)
+        self.assertEqual(sum(state["players"][0]["received"]),
+                         state["players"][0]["playing_handicap"])
+        # Ann concedes the first hole, Bob then Ann's next stroke on the second (her ball is
+        # holed with it), then the match.
+        r = cli(a, "round", "concede", rid, "--token", ann, "--hole")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("Bob 1 up with 2 to play", r.stdout)
+        r = cli(a, "--format", "json", "round", "concede", rid, "--token", bob, "--stroke")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        after = json.loads(r.stdout)["round"]
+        self.assertTrue(after["players"][0]["ball"]["holed"])
+        self.assertEqual(after["players"][0]["strokes"], 1)
+        r = cli(a, "round", "scorecard", rid)
+        self.assertIn("hole won by", r.stdout)
+        r = cli(a, "round", "concede", rid, "--token", bob, "--match")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = cli(a, "--format", "json", "round", "get", rid)
+        state = json.loads(r.stdout)["round"]
+        self.assertEqual((state["result"], state["winner"]), ("conceded", 0))
+        self.assertIn("Ann won", state["match_status"])
+        r = cli(a, "round", "concede", rid, "--token", bob)
+        self.assertEqual(r.returncode, 9, r.stderr)  # over
+        # Concessions are match play's; picking up is Stableford's.
+        r = cli(a, "--format", "json", "round", "create", "--players", "Cat,Dan", "--play",
+                "stableford", "--holes", "2-2", "--fast-forward")
+        made = json.loads(r.stdout)
+        rid, cat = made["round_id"], made["seats"][0]["token"]
+        r = cli(a, "round", "concede", rid, "--token", cat, "--hole")
+        self.assertEqual(r.returncode, 9, r.stderr)
+        self.assertIn("3.2b", r.stderr)
+        r = cli(a, "round", "stroke", rid, "--token", cat, "--ball-speed", "3", "--launch-deg",
+                "20", "--spin-rpm", "1000")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        time.sleep(0.3)
+        r = cli(a, "--format", "json", "round", "pickup", rid, "--token", cat)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertTrue(json.loads(r.stdout)["round"]["players"][0]["ball"]["picked_up"])
 
     def test_info_lists_billiards(self):
         r = cli(self.server.address, "info", "--format", "json")

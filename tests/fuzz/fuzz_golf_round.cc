@@ -1,11 +1,13 @@
 // The golf round's referee (sim/golf/round.h) on random rounds: sportsim_links with 1 to 4
-// players on random holes, order, profile, noise and seed, then a sequence of random actions:
-// strokes by any seat (launches, putts, swings of any strength and direction: refused or
-// played), relief choices (offered, unknown, with any back_m), "unplayable" and shot-clock
-// expiries. Invariants after every accepted action: strokes and penalties consistent; every
+// players on random holes, order, profile, noise, seed, form of play (stroke with or without a
+// maximum score, match, Stableford) and handicaps, then a sequence of random actions: strokes
+// by any seat (launches, putts, swings of any strength and direction: refused or played),
+// relief choices (offered, unknown, with any back_m), "unplayable", picking up, concessions
+// and shot-clock expiries. Invariants after every accepted action: strokes and penalties consistent; every
 // ball not holed at rest on the map, on the terrain, never out of bounds, in a penalty area
 // only with its own decision pending; the decision's seat and choices valid; ToPlay in range
-// (-1 only once over); a finished round's winners the lowest totals; and Decide a pure function
+// (-1 only once over); Stableford points the table's, scores within a maximum; a finished
+// round's winners the lowest totals (net), the most points, or the match's tally; and Decide a pure function
 // (the same call twice gives the same state).
 #include <fuzzer/FuzzedDataProvider.h>
 
@@ -46,7 +48,19 @@ void Check(const golf::Course& c, const golf::RoundSettings& s, const golf::Roun
     FUZZ_CHECK(p.strokes >= 0 && p.penalties >= 0 && p.penalties <= p.strokes,
                "after %s: seat %d strokes %d penalties %d", after, i, p.strokes, p.penalties);
     for (int score : p.scores) FUZZ_CHECK(score >= 0, "after %s: a score %d", after, score);
-    if (p.ball.holed || st.over) continue;
+    for (size_t h = 0; h < p.scores.size(); ++h) {
+      const golf::CourseHole& hole = *c.Hole(s.first_hole + static_cast<int>(h));
+      if (s.play == golf::PlayFormat::kStableford && p.scores[h] > 0) {
+        FUZZ_CHECK(p.points[h] == golf::StablefordPoints(p.scores[h], hole.par, p.received[h]),
+                   "after %s: seat %d hole %d points %d", after, i, hole.number, p.points[h]);
+      }
+      const int max = golf::MaxScoreOf(s.max_score, hole.par, p.received[h]);
+      FUZZ_CHECK(max == 0 || p.scores[h] <= max, "after %s: seat %d score %d over the maximum %d",
+                 after, i, p.scores[h], max);
+      FUZZ_CHECK(!p.no_score[h] || p.scores[h] == 0, "after %s: a score with no_score", after);
+    }
+    FUZZ_CHECK(!(p.ball.holed && p.ball.picked_up), "after %s: seat %d holed and picked up", after, i);
+    if (p.ball.holed || p.ball.picked_up || st.over) continue;
     const Eigen::Vector3d& b = p.ball.position_m;
     FUZZ_CHECK(b.allFinite(), "after %s: seat %d ball not finite", after, i);
     FUZZ_CHECK(c.terrain.Covers(b.x(), b.y()), "after %s: seat %d ball off the map (%g, %g)",
@@ -70,14 +84,30 @@ void Check(const golf::Course& c, const golf::RoundSettings& s, const golf::Roun
   const int next = golf::ToPlay(c, s, st);
   FUZZ_CHECK(st.over ? next == -1 : next >= 0 && next < n, "after %s: to play %d (over %d)",
              after, next, st.over);
-  if (st.over) {
+  if (st.over && s.play == golf::PlayFormat::kMatch) {
+    const golf::MatchStatus m = golf::MatchStatusOf(s, st);
+    if (st.result == "conceded") {
+      FUZZ_CHECK(st.winners.size() == 1, "after %s: a conceded match's winners", after);
+    } else if (st.result == "halved") {
+      FUZZ_CHECK(m.leader == -1 && m.to_play == 0 && st.winners.size() == 2, "after %s: halved", after);
+    } else {
+      FUZZ_CHECK(m.leader >= 0 && m.up > m.to_play && st.winners == std::vector<int>{m.leader},
+                 "after %s: match result %s, leader %d up %d to play %d", after, st.result.c_str(),
+                 m.leader, m.up, m.to_play);
+    }
+  } else if (st.over) {
     FUZZ_CHECK(st.result == "finished" && !st.winners.empty(), "after %s: a round over without "
                "winners", after);
+    const bool net = std::any_of(s.players.begin(), s.players.end(),
+                                 [](const golf::RoundPlayerSpec& p) { return p.handicap_index.has_value(); });
+    auto key = [&](const golf::RoundPlayer& p) {
+      return s.play == golf::PlayFormat::kStableford ? -p.Points() : (net ? p.NetTotal() : p.Total());
+    };
     int best = 1 << 30;
-    for (const golf::RoundPlayer& p : st.players) best = std::min(best, p.Total());
+    for (const golf::RoundPlayer& p : st.players) best = std::min(best, key(p));
     for (int w : st.winners) {
-      FUZZ_CHECK(st.players[w].Total() == best, "after %s: winner %d total %d, best %d", after, w,
-                 st.players[w].Total(), best);
+      FUZZ_CHECK(key(st.players[w]) == best, "after %s: winner %d has %d, best %d", after, w,
+                 key(st.players[w]), best);
     }
   }
 }
@@ -129,12 +159,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   s.realism = in.ConsumeBool() ? golf::Realism::kArcade : golf::Realism::kRealistic;
   s.noise = in.ConsumeFloatingPointInRange(0.0, 5.0);
   s.seed = in.ConsumeIntegral<uint64_t>();
+  // The forms of play: match play needs two players; handicaps and a maximum score at random.
+  s.play = static_cast<golf::PlayFormat>(in.ConsumeIntegralInRange(0, 2));
+  if (s.play == golf::PlayFormat::kMatch && players != 2) s.play = golf::PlayFormat::kStroke;
+  for (golf::RoundPlayerSpec& p : s.players) {
+    if (in.ConsumeBool()) p.handicap_index = in.ConsumeFloatingPointInRange(-10.0, 54.0);
+  }
+  if (s.play == golf::PlayFormat::kStroke) {
+    static const char* kMax[] = {"none", "net_double_bogey", "par+2", "8"};
+    (void)golf::SetRoundVariant("max_score", kMax[in.ConsumeIntegralInRange(0, 3)], &s);
+  }
   absl::StatusOr<golf::RoundState> started = golf::StartRound(c, s);
   if (!started.ok()) return 0;  // a tee some hole lacks
   golf::RoundState st = *started;
   Check(c, s, st, "start");
   static const char* kChoices[] = {"stroke_and_distance", "back_on_the_line", "lateral",
-                                   "back_on_the_line_outside_bunker", "unplayable", "drop"};
+                                   "back_on_the_line_outside_bunker", "unplayable", "drop",
+                                   "pick_up", "concede_stroke", "concede_hole", "concede_match"};
   for (int step = 0; step < 10 && in.remaining_bytes() > 0 && !st.over; ++step) {
     const int action = in.ConsumeIntegralInRange(0, 9);
     const int seat = in.ConsumeIntegralInRange(-1, players);
@@ -146,7 +187,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         Check(c, s, st, "a stroke");
       }
     } else if (action <= 8) {
-      golf::RoundChoice choice{kChoices[in.ConsumeIntegralInRange(0, 5)], std::nullopt};
+      golf::RoundChoice choice{kChoices[in.ConsumeIntegralInRange(0, 9)], std::nullopt};
       if (in.ConsumeBool()) choice.back_m = in.ConsumeFloatingPointInRange(-10.0, 600.0);
       absl::StatusOr<golf::RoundStep> r = golf::Decide(c, s, st, seat, choice);
       absl::StatusOr<golf::RoundStep> again = golf::Decide(c, s, st, seat, choice);

@@ -97,6 +97,12 @@ TEST(CourseTest, RefusesMalformedCoursesNamingTheField) {
        "surface golf=rough: surface rough: rolling_resistance must be finite"},
       {std::string(kSmall) + "surface golf=green stimp_ft=0.5\n", "stimp_ft must be finite"},
       {std::string(kSmall) + "teapot ref=1\n", "unknown element"},
+      {std::string(kSmall) + "rating tee=blue slope=120 course_rating=3.2\n", "no hole has a tee"},
+      {std::string(kSmall) + "rating tee=white slope=200 course_rating=3.2\n", "slope must be in [55, 155]"},
+      {std::string(kSmall) + "rating tee=white slope=120 course_rating=9\n", "course_rating must be"},
+      {std::string(kSmall) + "rating tee=white slope=120\n", "course_rating is required"},
+      {std::string(kSmall) + "rating tee=white slope=120 course_rating=3.2\n"
+                             "rating tee=white slope=121 course_rating=3.1\n", "given twice"},
       {"", "course: empty"},
   };
   for (const auto& [text, message] : cases) {
@@ -282,8 +288,13 @@ TEST(CourseTest, TheTextFormatRoundTrips) {
       }
     }
   }
-  auto small = ParseCourse(kSmall);
-  ASSERT_TRUE(small.ok());
+  const auto links = ParseCourse(FormatCourse(**BuiltinCourse("sportsim_links")));
+  ASSERT_EQ(links->ratings.size(), 2u);  // the white and red tees' ratings
+  EXPECT_EQ(links->RatingOf("red").slope, 119.0);
+  EXPECT_EQ(links->RatingOf("red").course_rating, 12.1);
+  auto small = ParseCourse(std::string(kSmall) + "rating tee=white slope=121 course_rating=3.4\n");
+  ASSERT_TRUE(small.ok()) << small.status();
+  EXPECT_EQ(small->RatingOf("white").slope, 121.0);
   auto again = ParseCourse(FormatCourse(*small));
   ASSERT_TRUE(again.ok()) << again.status();
   EXPECT_EQ(FormatCourse(*again), FormatCourse(*small));
