@@ -404,6 +404,10 @@ std::vector<CommandSpec> MakeSpecs() {
        "match play: concede the opponent's next stroke (the default; their ball is holed with "
        "it), the hole or the match (Rule 3.2b: final once made)",
        {{"token", "the conceding seat's token"}}},
+      {"round", "monitor", "ID --token T --device DEVICE_ID",
+       "bind a launch monitor (its GSPro Open Connect DeviceID) to the seat: its shots sent to "
+       "the server's Open Connect listener play the seat's strokes",
+       {{"token", "the seat's token"}, {"device", "the DeviceID the monitor's connector sends"}}},
       {"round", "pickup", "ID --token T",
        "pick up the seat's ball (Stableford: no score on the hole; stroke play with a maximum "
        "score: the maximum)",

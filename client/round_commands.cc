@@ -58,6 +58,7 @@ ABSL_FLAG(std::vector<std::string>, tees, {}, "round create: each player's tee, 
 ABSL_FLAG(std::string, play, "stroke", "round create: the form of play (stroke, match, stableford)");
 ABSL_FLAG(std::vector<std::string>, handicaps, {},
           "round create: each player's Handicap Index in seat order (+X: a plus handicap; -: none)");
+ABSL_FLAG(std::string, device, "", "round monitor: the launch monitor's Open Connect DeviceID");
 ABSL_FLAG(bool, fast_forward, false, "round create: each stroke comes to rest at the next tick");
 ABSL_FLAG(std::optional<double>, back_m, std::nullopt,
           "round decide: back-on-the-line, metres behind the reference point");
@@ -417,6 +418,26 @@ int RunConcede(const Context& ctx, Stub& stub, const std::vector<std::string>& a
   return Print(ctx, r, [&] { PrintRound(r.round()); });
 }
 
+// `round monitor`: binds a launch monitor's Open Connect DeviceID to the seat.
+int RunMonitor(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.size() != 1) return UsageError("round monitor ID --token T --device DEVICE_ID");
+  v1::BindMonitorRequest request;
+  request.set_round_id(args[0]);
+  request.set_token(absl::GetFlag(FLAGS_token));
+  if (auto bad = Need(request.token(), "round monitor (the seat's token)")) return UsageError(*bad);
+  request.set_device_id(absl::GetFlag(FLAGS_device));
+  if (request.device_id().empty()) {
+    return UsageError("round monitor needs --device: the DeviceID the monitor's connector sends");
+  }
+  v1::BindMonitorResponse r;
+  const grpc::Status status = stub.BindMonitor(ctx.NewCall().get(), request, &r);
+  if (!status.ok()) return ReportRpcError(status);
+  return Print(ctx, r, [&] {
+    std::printf("device %s plays seat %u: point its Open Connect connector at %s\n",
+                request.device_id().c_str(), r.seat(), r.listen().c_str());
+  });
+}
+
 int RunRecord(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
   if (args.size() != 1) return UsageError("round record ID");
   v1::GetRoundRecordRequest request;
@@ -502,7 +523,7 @@ int RunWatch(const Context& ctx, Stub& stub, const std::vector<std::string>& arg
 
 int RunRound(const Context& ctx, const std::vector<std::string>& args) {
   static constexpr const char* kVerbs =
-      "create, list, get, delete, stroke, decide, concede, pickup, watch, scorecard, record";
+      "create, list, get, delete, stroke, decide, concede, pickup, monitor, watch, scorecard, record";
   if (args.empty()) return UsageError(std::string("round needs a subcommand: ") + kVerbs);
   const std::string& verb = args[0];
   if (ctx.format == Format::kCsv) return UsageError("round " + verb + " has no csv form (json or text)");
@@ -517,6 +538,7 @@ int RunRound(const Context& ctx, const std::vector<std::string>& args) {
   if (verb == "decide") return RunDecide(ctx, *stub, rest);
   if (verb == "concede") return RunConcede(ctx, *stub, rest, false);
   if (verb == "pickup") return RunConcede(ctx, *stub, rest, true);
+  if (verb == "monitor") return RunMonitor(ctx, *stub, rest);
   if (verb == "watch") return RunWatch(ctx, *stub, rest);
   if (verb == "record") return RunRecord(ctx, *stub, rest);
   return UsageError("unknown round subcommand '" + verb + "' (" + kVerbs + ")");

@@ -70,6 +70,11 @@ ABSL_FLAG(int, max_catchup_ticks, 12,
           "A table further behind its clock than this slips (runs slower than real time) instead "
           "of racing to catch up");
 ABSL_FLAG(int, event_log, 512, "Events each table keeps for watchers resuming with from_sequence");
+ABSL_FLAG(std::string, open_connect_listen, "",
+          "host:port for launch monitors speaking GSPro Open Connect v1 (JSON over TCP; the "
+          "convention is port 921); empty: off");
+ABSL_FLAG(absl::Duration, open_connect_idle_timeout, absl::Seconds(60),
+          "An Open Connect connection silent this long is closed (connectors send heartbeats)");
 ABSL_FLAG(std::string, http_listen, "",
           "host:port for gRPC-Web (browsers) and the viewer; empty: off");
 ABSL_FLAG(std::string, web_root, sportsim::server::kDefaultWebRoot,
@@ -190,6 +195,14 @@ int main(int argc, char** argv) {
     return 2;
   }
   config.http_listen = absl::GetFlag(FLAGS_http_listen);
+  config.open_connect.listen = absl::GetFlag(FLAGS_open_connect_listen);
+  config.open_connect.idle_timeout = absl::GetFlag(FLAGS_open_connect_idle_timeout);
+  if (config.open_connect.idle_timeout < absl::Seconds(1) ||
+      config.open_connect.idle_timeout > absl::Hours(1)) {
+    std::cerr << "sportsim-server: --open_connect_idle_timeout must be in [1s, 1h], got "
+              << absl::FormatDuration(config.open_connect.idle_timeout) << "\n";
+    return 2;
+  }
   config.web_root = absl::GetFlag(FLAGS_web_root);
   config.http_cors_origins = absl::GetFlag(FLAGS_http_cors_origins);
   config.http_max_streams_per_client = absl::GetFlag(FLAGS_http_max_streams_per_client);
@@ -304,6 +317,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   std::cout << "sportsim-server listening on " << (*app)->address() << std::endl;
+  if ((*app)->open_connect_port() != 0) {
+    std::cout << "sportsim-server Open Connect (launch monitors) on port "
+              << (*app)->open_connect_port() << std::endl;
+  }
   if ((*app)->http_port() != 0) {
     std::cout << "sportsim-server gRPC-Web and viewer on port " << (*app)->http_port()
               << std::endl;

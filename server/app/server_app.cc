@@ -253,6 +253,19 @@ absl::StatusOr<std::unique_ptr<ServerApp>> ServerApp::Start(const ServerConfig& 
     }
     app->web_ = *std::move(web);
   }
+  if (!config.open_connect.listen.empty()) {
+    absl::StatusOr<std::unique_ptr<OpenConnectListener>> oc =
+        OpenConnectListener::Start(config.open_connect, app->rounds_.get(), app->pool_.get());
+    if (!oc.ok()) {
+      if (app->web_ != nullptr) app->web_->Shutdown();
+      app->server_->Shutdown();
+      return oc.status();
+    }
+    app->open_connect_ = *std::move(oc);
+    const size_t colon = config.open_connect.listen.rfind(':');
+    app->rounds_->SetMonitorListen(
+        absl::StrCat(config.open_connect.listen.substr(0, colon), ":", app->open_connect_->port()));
+  }
   app->server_->GetHealthCheckService()->SetServingStatus(true);
   if (app->store_ != nullptr) {
     const absl::Duration adopt_every = config.store.lease / 2;
@@ -363,6 +376,7 @@ void ServerApp::Shutdown(absl::Duration grace) {
   sessions_->Shutdown(absl::UnavailableError("the server is shutting down"));
   rounds_->Shutdown(absl::UnavailableError("the server is shutting down"));
   if (web_ != nullptr) web_->Shutdown();
+  if (open_connect_ != nullptr) open_connect_->Stop();
   scheduler_->Stop();
   // Queued simulations end now (UNAVAILABLE); running ones get the grace, then stop at their
   // next poll. Then the calls still open get what is left of the grace.

@@ -14,6 +14,7 @@
 #include "absl/time/time.h"
 #include "server/app/metrics.h"
 #include "server/rpc/grpc_web.h"
+#include "server/rpc/open_connect.h"
 #include "server/rpc/services.h"
 #include "server/store/store.h"
 #include "server/swing/round_world.h"
@@ -54,6 +55,8 @@ struct ServerConfig {
   std::vector<std::string> http_cors_origins;
   int http_max_streams_per_client = 4;
   GrpcWebLimits http;  ///< the web port's connection limits and timeouts (--http_*)
+  /// Launch monitors over GSPro Open Connect: listen address ("" = off, the default).
+  OpenConnectOptions open_connect;
   StreamLimits streams;  ///< --stream_window_bytes, --stream_stall_timeout
   WorkLimits work;  ///< the simulation pool (--sim_workers, --max_queued_simulations,
                     ///< --max_request_cpu)
@@ -100,6 +103,9 @@ class ServerApp {
   int http_port() const;
   /// The gRPC-Web gateway, or null when off.
   GrpcWebGateway* web() { return web_.get(); }
+  /// The Open Connect listener's port, or 0 when off.
+  int open_connect_port() const { return open_connect_ != nullptr ? open_connect_->port() : 0; }
+  OpenConnectListener* open_connect() { return open_connect_.get(); }
   /// The /metrics port, or 0 when metrics are off.
   int metrics_port() const;
   TableRegistry& tables() { return *tables_; }
@@ -137,6 +143,7 @@ class ServerApp {
   std::vector<std::unique_ptr<grpc::Service>> services_;
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<GrpcWebGateway> web_;  // goes before the server its channel calls
+  std::unique_ptr<OpenConnectListener> open_connect_;  // goes before the pool and registries
   std::string host_;
   int port_ = 0;
   std::atomic<bool> shut_down_{false};

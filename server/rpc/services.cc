@@ -333,6 +333,11 @@ class SwingService final : public v1::Swing::CallbackService {
                                         v1::DecideRoundResponse* response) override {
     return Unary(ctx, response, [&] { return rounds_->Decide(*request); });
   }
+  grpc::ServerUnaryReactor* BindMonitor(grpc::CallbackServerContext* ctx,
+                                        const v1::BindMonitorRequest* request,
+                                        v1::BindMonitorResponse* response) override {
+    return Unary(ctx, response, [&] { return rounds_->BindMonitor(*request); });
+  }
   grpc::ServerWriteReactor<v1::RoundSnapshot>* WatchRound(
       grpc::CallbackServerContext*, const v1::WatchRoundRequest* request) override {
     return new WatchReactor<RoundRegistry, RoundWatcher, v1::WatchRoundRequest>(
@@ -820,9 +825,15 @@ v1::GetInfoResponse MakeServerInfo() {
   for (std::string_view c : golf::BuiltinCourseNames()) caps->add_golf_courses(std::string(c));
   for (const golf::Surface& s : golf::BuiltinSurfaces()) caps->add_golf_surfaces(s.name);
   caps->add_golf_round_rules("order=honour|ready");
+  caps->add_golf_round_rules("max_score=N|par+N|net_double_bogey|none");
+  caps->add_golf_round_rules("allowance=PCT");
   for (const char* c : {"stroke_and_distance", "back_on_the_line", "lateral",
-                        "back_on_the_line_outside_bunker", "unplayable"}) {
+                        "back_on_the_line_outside_bunker", "unplayable", "pick_up",
+                        "concede_stroke", "concede_hole", "concede_match"}) {
     caps->add_golf_round_choices(c);
+  }
+  for (golf::PlayFormat p : {golf::PlayFormat::kStroke, golf::PlayFormat::kMatch, golf::PlayFormat::kStableford}) {
+    caps->add_golf_round_plays(std::string(golf::PlayFormatName(p)));
   }
   *caps->mutable_presets() = caps->table_presets();
   caps->add_services(v1::Server::service_full_name());

@@ -724,6 +724,62 @@ absl::StatusOr<v1::DecideRoundResponse> RoundRegistry::DecideOn(Round& r, int se
   return response;
 }
 
+void RoundRegistry::SetMonitorListen(std::string address) {
+  absl::MutexLock lock(&monitors_mu_);
+  monitor_listen_ = std::move(address);
+}
+
+std::optional<MonitorBinding> RoundRegistry::Monitor(const std::string& device_id) const {
+  absl::MutexLock lock(&monitors_mu_);
+  auto it = monitors_.find(device_id);
+  if (it == monitors_.end()) return std::nullopt;
+  return it->second;
+}
+
+absl::StatusOr<v1::BindMonitorResponse> RoundRegistry::BindMonitor(const v1::BindMonitorRequest& request) {
+  std::string listen;
+  {
+    absl::MutexLock lock(&monitors_mu_);
+    listen = monitor_listen_;
+  }
+  if (listen.empty()) {
+    return absl::FailedPreconditionError(
+        "this server has no Open Connect listener (start it with --open_connect_listen HOST:PORT)");
+  }
+  const std::string& d = request.device_id();
+  const bool printable = std::all_of(d.begin(), d.end(), [](char c) {
+    return static_cast<unsigned char>(c) >= 0x20 && c != 0x7f;
+  });
+  if (d.empty() || d.size() > 64 || !printable) {
+    return absl::InvalidArgumentError("device_id: the monitor's DeviceID, 1 to 64 printable characters");
+  }
+  absl::StatusOr<int> seat = host_.Act<int>(
+      request.round_id(), request.token(),
+      [](const std::shared_ptr<Round>&, int seat, Round::Pump&) -> absl::StatusOr<int> {
+        if (absl::Status s = CheckSeat(seat); !s.ok()) return s;
+        return seat;
+      });
+  if (!seat.ok()) return seat.status();
+  {
+    absl::MutexLock lock(&monitors_mu_);
+    // Bounded: eight seats a round. At the cap, bindings of rounds that are gone make room.
+    const size_t cap = static_cast<size_t>(std::max(1, limits_.world.max_worlds)) * 8;
+    if (monitors_.size() >= cap && !monitors_.contains(d)) {
+      for (auto it = monitors_.begin(); it != monitors_.end();) {
+        it = host_.Find(it->second.round_id).ok() ? std::next(it) : monitors_.erase(it);
+      }
+      if (monitors_.size() >= cap) {
+        return absl::ResourceExhaustedError(absl::StrFormat("at most %d monitors are bound", cap));
+      }
+    }
+    monitors_[d] = MonitorBinding{request.round_id(), request.token(), *seat};
+  }
+  v1::BindMonitorResponse response;
+  response.set_seat(static_cast<uint32_t>(*seat));
+  response.set_listen(listen);
+  return response;
+}
+
 absl::StatusOr<v1::RoundRecord> RoundRegistry::Record(const v1::GetRoundRecordRequest& request) {
   absl::StatusOr<std::shared_ptr<Round>> found = host_.Find(request.round_id());
   if (!found.ok()) return found.status();

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -23,6 +24,7 @@
 #include "absl/base/thread_annotations.h"
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
+#include "absl/synchronization/mutex.h"
 #include "server/world/journal.h"
 #include "server/world/scheduler.h"
 #include "server/world/watcher.h"
@@ -143,6 +145,13 @@ absl::StatusOr<golf::RoundSettings> RoundSettingsFromProto(const v1::CreateRound
 /// A stroke request's stroke (INVALID_ARGUMENT names the field).
 absl::StatusOr<golf::RoundStroke> RoundStrokeFromProto(const v1::PlayStrokeRequest& request);
 
+/// A launch monitor's GSPro Open Connect DeviceID bound to a seat (BindMonitor).
+struct MonitorBinding {
+  std::string round_id;
+  std::string token;  ///< the seat's: the monitor's shots are that seat's strokes
+  int seat = 0;
+};
+
 /// Every round of the server: the round calls over a WorldHost<RoundKind>.
 class RoundRegistry {
  public:
@@ -167,6 +176,14 @@ class RoundRegistry {
   absl::StatusOr<v1::DecideRoundResponse> Decide(const v1::DecideRoundRequest& request);
   absl::StatusOr<v1::RoundRecord> Record(const v1::GetRoundRecordRequest& request);
 
+  /// Binds a DeviceID to the seat of the request's token (kept in memory: a restarted server
+  /// needs the binding again). FAILED_PRECONDITION when no listener was set.
+  absl::StatusOr<v1::BindMonitorResponse> BindMonitor(const v1::BindMonitorRequest& request);
+  /// The seat a DeviceID plays, if bound.
+  std::optional<MonitorBinding> Monitor(const std::string& device_id) const;
+  /// The Open Connect listener's address ("": none, the default).
+  void SetMonitorListen(std::string address);
+
   absl::StatusOr<std::shared_ptr<RoundWatcher>> Watch(const v1::WatchRoundRequest& request,
                                                       RoundSink* sink);
   void Unwatch(const std::string& round_id, const RoundWatcher* watcher);
@@ -190,6 +207,9 @@ class RoundRegistry {
 
   const RoundLimits limits_;
   RoundHost host_;
+  mutable absl::Mutex monitors_mu_;
+  std::map<std::string, MonitorBinding> monitors_ ABSL_GUARDED_BY(monitors_mu_);
+  std::string monitor_listen_ ABSL_GUARDED_BY(monitors_mu_);
 };
 
 }  // namespace sportsim::server

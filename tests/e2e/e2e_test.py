@@ -282,6 +282,12 @@ class CliAgainstServer(unittest.TestCase):
         self.assertIn("Ann won", state["match_status"])
         r = cli(a, "round", "concede", rid, "--token", bob)
         self.assertEqual(r.returncode, 9, r.stderr)  # over
+        # This server has no Open Connect listener: binding a monitor says how to start one.
+        r = cli(a, "round", "monitor", rid, "--token", bob, "--device", "MEVO-1")
+        self.assertEqual(r.returncode, 9, r.stderr)
+        self.assertIn("--open_connect_listen", r.stderr)
+        r = cli(a, "round", "monitor", rid, "--token", bob)
+        self.assertEqual(r.returncode, 64, r.stderr)
         # Concessions are match play's; picking up is Stableford's.
         r = cli(a, "--format", "json", "round", "create", "--players", "Cat,Dan", "--play",
                 "stableford", "--holes", "2-2", "--fast-forward")
