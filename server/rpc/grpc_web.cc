@@ -588,7 +588,8 @@ MHD_Result GrpcWebGateway::Impl::Static(MHD_Connection* conn, const std::string&
   // Browsers ask for an icon on their own; the viewer has none.
   if (path == "/favicon.ico") return Respond(conn, 204, "image/x-icon", {}, "");
   std::string name = path.substr(1);
-  if (name.empty() || path.starts_with("/table/") || path.starts_with("/swing/")) {
+  if (name.empty() || path.starts_with("/table/") || path.starts_with("/swing/") ||
+      path.starts_with("/round/")) {
     name = "index.html";
   }
   const bool plain = !name.empty() && name[0] != '.' &&

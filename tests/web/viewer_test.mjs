@@ -158,17 +158,20 @@ function stats(xs) {
   return { n: s.length, median: +q(0.5).toFixed(1), p95: +q(0.95).toFixed(1), max: +s[s.length - 1].toFixed(1) };
 }
 
-test("list page shows tables and sessions with links", async () => {
+test("list page shows tables, sessions and rounds with links", async () => {
   const t = cli("table", "create", "--table", "pool-9ft");
   const s = cli("swing", "create");
+  const r = cli("round", "create", "--players", "Cat");
   const page = await openPage("/");
-  await waitFor(page, ([tid, sid]) => {
+  await waitFor(page, ([tid, sid, rid]) => {
     const v = window.__viewer;
-    return v.listed && v.listed.tables.includes(tid) && v.listed.sessions.includes(sid);
-  }, [t.table_id, s.session_id]);
+    return v.listed && v.listed.tables.includes(tid) && v.listed.sessions.includes(sid) &&
+      v.listed.rounds.includes(rid);
+  }, [t.table_id, s.session_id, r.round_id]);
   const links = await page.$$eval("a", (as) => as.map((a) => a.getAttribute("href")));
   assert.ok(links.includes("/table/" + t.table_id));
   assert.ok(links.includes("/swing/" + s.session_id));
+  assert.ok(links.includes("/round/" + r.round_id));
   // Transfer size of the page itself: the document and its script and style sheet.
   const size = await page.evaluate(() => {
     const nav = performance.getEntriesByType("navigation")[0];
@@ -303,6 +306,59 @@ test("place mode: a click on the cloth puts the cue ball there (PlaceBall)", asy
   const truth = cli("table", "get", t.table_id);
   const cue = truth.balls.find((b) => b.id === "cue");
   assert.ok(Math.abs(cue.x_m + 0.3) < 0.01 && Math.abs(cue.y_m - 0.2) < 0.01, JSON.stringify(cue));
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test("round page draws the hole, the balls where the server has them, and plays a stroke", async () => {
+  const made = cli("round", "create", "--players", "Ann,Bob", "--play", "stableford", "--handicaps", "12,-");
+  const ann = made.seats[0].token;
+  const page = await openPage("/round/" + made.round_id + "#token=" + ann);
+  await waitFor(page, () => window.__viewer.ready && window.__viewer.round && window.__viewer.round.ballsDrawn.length === 2);
+  let v = await viewer(page);
+  assert.ok(v.round.areasDrawn > 10, `${v.round.areasDrawn} surface areas drawn`);
+  assert.ok(v.round.shadedCells > 1000, "hill shading drawn");
+  assert.equal(v.round.scorecardRows, 2);
+  assert.equal(v.round.play, "stableford");
+  const at = (tf, x, y) => [tf.ox + x * tf.scale, tf.oy - y * tf.scale];
+  let truth = cli("round", "get", made.round_id).round;
+  const pin = at(v.round.transform, truth.pin_x_m, truth.pin_y_m);
+  assert.ok(Math.hypot(pin[0] - v.round.pinPx[0], pin[1] - v.round.pinPx[1]) < 0.5, "the pin where the server has it");
+  for (const b of v.round.ballsDrawn) {
+    const p = truth.players[b.seat].ball;
+    const want = at(v.round.transform, p.x_m, p.y_m);
+    assert.ok(Math.hypot(want[0] - b.x, want[1] - b.y) < 0.5, `seat ${b.seat} drawn at its ball`);
+  }
+  // Ann drives from the page: the driver at full power, at the pin.
+  await page.select("#club", "driver");
+  await page.click("#play");
+  await waitFor(page, () => window.__viewer.round.played === 1 || window.__viewer.round.lastError);
+  v = await viewer(page);
+  assert.equal(v.round.lastError, "");
+  for (let i = 0; i < 200; i++) {
+    truth = cli("round", "get", made.round_id).round;
+    if (!truth.stroke_in_play) break;
+    await new Promise((r) => setTimeout(r, 100));
+  }
+  assert.equal(truth.players[0].strokes, 1);
+  assert.equal(truth.stroke_in_play, false);
+  const ball = truth.players[0].ball;
+  assert.ok(ball.distance_to_pin_m < 250, `the drive went toward the pin (${ball.distance_to_pin_m} m left)`);
+  await waitFor(page, (b) => {
+    const r = window.__viewer.round;
+    const d = r.ballsDrawn.find((x) => x.seat === 0);
+    const tf = r.transform;
+    return d && Math.hypot(d.x - (tf.ox + b.x_m * tf.scale), d.y - (tf.oy - b.y_m * tf.scale)) < 0.5;
+  }, ball);
+  v = await viewer(page);
+  assert.ok(v.round.pathPoints[0] > 5, `the drive's path drawn from its live frames (${v.round.pathPoints[0]} points)`);
+  // Not Ann's turn now: the page shows the server's refusal, and nothing changes.
+  await page.click("#play");
+  await waitFor(page, () => window.__viewer.round.lastError !== "");
+  v = await viewer(page);
+  assert.match(v.round.lastError, /Rule 6\.4/);
+  assert.equal(cli("round", "get", made.round_id).round.players[0].strokes, 1);
+  measurements.screenshot_round = await screenshot(page, "web-round.png");
   assert.deepEqual(page.errors, []);
   await page.close();
 });

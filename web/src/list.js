@@ -1,4 +1,4 @@
-// "/": the tables and swing sessions the server holds, with links to their pages.
+// "/": the tables, swing sessions and golf rounds the server holds, with links to their pages.
 import { SwingPhase } from "../gen/sportsim/v1/swing_pb.js";
 import { setConnection } from "./conn.js";
 import { viewer, resetViewer } from "./state.js";
@@ -15,13 +15,16 @@ export function showList(app, clients) {
   let stopped = false;
   const tables = el("div");
   const sessions = el("div");
-  app.append(el("h2", {}, "Tables"), tables, el("h2", {}, "Swing sessions"), sessions);
+  const rounds = el("div");
+  app.append(el("h2", {}, "Tables"), tables, el("h2", {}, "Swing sessions"), sessions,
+             el("h2", {}, "Golf rounds"), rounds);
 
   async function load() {
     try {
-      const [t, s] = await Promise.all([
+      const [t, s, r] = await Promise.all([
         clients.billiards.listTables({ pageSize: 1000 }),
         clients.swing.listSessions({ pageSize: 1000 }),
+        clients.swing.listRounds({ pageSize: 1000 }),
       ]);
       if (stopped) return;
       setConnection("connected", false);
@@ -52,8 +55,23 @@ export function showList(app, clients) {
         }
         sessions.append(tb);
       }
+      rounds.textContent = "";
+      if (r.rounds.length === 0) rounds.append(el("p", { class: "muted" }, "No rounds."));
+      else {
+        const tb = el("table", { class: "list", id: "rounds" },
+          el("tr", {}, ...["round", "course", "play", "hole", "players", "watchers", "state"].map((h) => el("th", {}, h))));
+        for (const b of r.rounds) {
+          tb.append(el("tr", {},
+            el("td", {}, el("a", { href: "/round/" + encodeURIComponent(b.roundId) }, b.roundId)),
+            el("td", {}, b.course), el("td", {}, b.play), el("td", {}, String(b.hole)),
+            el("td", {}, b.players.join(", ")), el("td", {}, String(b.watchers)),
+            el("td", {}, b.result || "playing")));
+        }
+        rounds.append(tb);
+      }
       viewer.ready = true;
-      viewer.listed = { tables: t.tables.map((b) => b.tableId), sessions: s.sessions.map((b) => b.sessionId) };
+      viewer.listed = { tables: t.tables.map((b) => b.tableId), sessions: s.sessions.map((b) => b.sessionId),
+                        rounds: r.rounds.map((b) => b.roundId) };
     } catch (e) {
       setConnection("error: " + e.message, true);
       viewer.error = String(e.message);

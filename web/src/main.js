@@ -1,9 +1,10 @@
-// The viewer: a single page; routes /, /table/ID, /swing/ID (also #/table/ID, #/swing/ID).
-// A seat token rides in the hash: /table/ID#token=SECRET.
+// The viewer: a single page; routes /, /table/ID, /swing/ID, /round/ID (also #/table/ID, ...).
+// A seat token rides in the hash: /table/ID#token=SECRET, /round/ID#token=SECRET.
 import { makeClients } from "./rpc.js";
 import { showList } from "./list.js";
 import { showTable } from "./table.js";
 import { showSwing } from "./swing.js";
+import { showRound } from "./round.js";
 import { viewer } from "./state.js";
 
 const clients = makeClients(location.origin);
@@ -21,9 +22,9 @@ function hashParams() {
 function route() {
   // The path, or a "#/table/ID" style hash for static hosting without rewrites.
   let path = location.pathname;
-  const hashPath = location.hash.match(/^#(\/(?:table|swing)\/[^&#]+)/);
+  const hashPath = location.hash.match(/^#(\/(?:table|swing|round)\/[^&#]+)/);
   if (hashPath) path = hashPath[1];
-  const m = path.match(/^\/(table|swing)\/([^/]+)\/?$/);
+  const m = path.match(/^\/(table|swing|round)\/([^/]+)\/?$/);
   const app = document.getElementById("app");
   const crumb = document.getElementById("crumb");
   if (viewer.stop) { viewer.stop(); viewer.stop = null; }
@@ -37,6 +38,10 @@ function route() {
     crumb.textContent = "› swing " + decodeURIComponent(m[2]);
     viewer.page = "swing";
     viewer.stop = showSwing(app, clients, decodeURIComponent(m[2]));
+  } else if (m && m[1] === "round") {
+    crumb.textContent = "› round " + decodeURIComponent(m[2]);
+    viewer.page = "round";
+    viewer.stop = showRound(app, clients, decodeURIComponent(m[2]), params.token || "");
   } else {
     crumb.textContent = "";
     viewer.page = "list";

@@ -25,6 +25,8 @@ export const viewer = {
   events: 0,
   // swing page
   swing: null,
+  // round page
+  round: null,
   stop: null,
 };
 
@@ -33,6 +35,6 @@ export function resetViewer() {
     ready: false, frames: 0, error: "", transform: null, cushionsDrawn: 0, pocketsDrawn: 0,
     ballsDrawn: [], lastSnapshotSeq: 0, lastSnapshotTick: 0, snapshots: 0, atRest: true,
     aimLine: [], aimPaths: [], aimStrike: null, previews: 0, shots: 0, paintDelaysMs: [],
-    publishToPaintMs: [], gameText: "", events: 0, swing: null,
+    publishToPaintMs: [], gameText: "", events: 0, swing: null, round: null,
   });
 }
