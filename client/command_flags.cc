@@ -67,7 +67,7 @@ const Flags& SetupFlags() {
       {"ball", "put a ball at rest at (X, Y) m; an id already racked moves there, a new one is "
                "added (repeatable, each id once)"},
       {"param", "a model parameter (repeatable; `sportsim info` lists names, units, ranges)"},
-      {"cushion_model", "han (default) or mirror"},
+      {"cushion_model", "han (default), mathavan2010 or mirror"},
       {"jitter", "seeded random gaps between racked balls, [0, 0.01] m (default 0)"},
       {"rack_seed", "seed of --jitter (default 0)"},
   };

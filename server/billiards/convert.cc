@@ -99,6 +99,9 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
     case v1::CUSHION_MODEL_MIRROR:
       spec->params.cushion_model = b::CushionModel::kMirror;
       break;
+    case v1::CUSHION_MODEL_MATHAVAN_2010:
+      spec->params.cushion_model = b::CushionModel::kMathavan2010;
+      break;
     default:
       return absl::InvalidArgumentError(
           absl::StrFormat("table.cushion_model: unknown value %d", setup.cushion_model()));

@@ -170,6 +170,84 @@ bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Bal
   return true;
 }
 
+// Mathavan, Jackson and Parkin (2010), integrated over the normal impulse P at the nose I. The
+// cushion frame: y toward the cushion (-normal), z up, x = y x z along the rail. The nose
+// touches the ball at angle theta above its equator (sin theta = (h - R) / R); the slate at C
+// below. Each step dP moves the ball by the nose's normal impulse and the two sliding
+// frictions (mu_w at I, mu_s at C, whose normal load is dP (sin theta + mu_w sin phi
+// cos theta)), each opposing its contact's slip direction (phi at I, phi' at C) at that step.
+// Compression lasts while the ball still moves into the cushion; restitution stops when the
+// normal work at I, W = integral of the nose's normal velocity dP, has come back down to
+// (1 - e^2) of its value at the end of compression.
+void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, double e,
+                            double mu_cushion, double mu_slate, Ball* ball) {
+  const PhysicsParams& p = model.params();
+  const Eigen::Vector3d ey = -nh, ez = Eigen::Vector3d::UnitZ(), ex = ey.cross(ez);
+  const double m = model.mass(), radius = model.radius();
+  const double st = model.cushion_sin(), ct = std::sqrt(1.0 - st * st);
+  const double mw = mu_cushion, ms = mu_slate;
+  double vx = ball->v.dot(ex), vy = ball->v.dot(ey);
+  double wx = ball->w.dot(ex), wy = ball->w.dot(ey), wz = ball->w.dot(ez);
+  const int steps = static_cast<int>(p.cushion_impulse_steps);
+  const double dp = (1.0 + e) * m * vy / steps;
+  const double kv = dp / m, kw = 2.5 * dp / (m * radius);
+  double work = 0.0, work_compression = 0.0;
+  bool compressing = true;
+  // Restitution takes about e steps for each of compression's; the cap only guards. Each step's
+  // increments are constant over it, so the two phase ends are placed inside their step by
+  // interpolation: the compression's work where vy crosses 0, and the last step cut where the
+  // work reaches its target. With the midpoint rule the error falls as 1/N^2.
+  for (int k = 0; k < 4 * steps + 8; ++k) {
+    // The increments of one step from a state: each friction against its contact's slip.
+    auto increments = [&](double ux, double uy, double ox, double oy, double oz, double d[5]) {
+      const double sx = ux + oy * radius * st - oz * radius * ct;  // slip at I, across the nose
+      const double sy = -uy * st + ox * radius;
+      const double cx = ux - oy * radius;                          // slip at C, on the slate
+      const double cy = uy + ox * radius;
+      const double s = std::hypot(sx, sy), c = std::hypot(cx, cy);
+      const double cphi = s > 0.0 ? sx / s : 0.0, sphi = s > 0.0 ? sy / s : 0.0;
+      const double cphi2 = c > 0.0 ? cx / c : 0.0, sphi2 = c > 0.0 ? cy / c : 0.0;
+      const double load = st + mw * sphi * ct;  // the slate's normal impulse per dP
+      d[0] = -kv * (mw * cphi + ms * cphi2 * load);
+      d[1] = -kv * (ct - mw * st * sphi + ms * sphi2 * load);
+      d[2] = -kw * (mw * sphi + ms * sphi2 * load);
+      d[3] = -kw * (mw * cphi * st - ms * cphi2 * load);
+      d[4] = kw * (mw * cphi * ct);
+    };
+    // The midpoint rule: the slip directions taken half a step in (second order in dP).
+    double d[5];
+    increments(vx, vy, wx, wy, wz, d);
+    increments(vx + 0.5 * d[0], vy + 0.5 * d[1], wx + 0.5 * d[2], wy + 0.5 * d[3], wz + 0.5 * d[4], d);
+    const double dvx = d[0], dvy = d[1], dwx = d[2], dwy = d[3], dwz = d[4];
+    const double dwork = 0.5 * dp * (2.0 * vy + dvy) * ct;  // the nose's normal velocity, trapezoid
+    double f = 1.0;  // the share of this step taken
+    bool done = false;
+    if (compressing && vy + dvy <= 0.0) {
+      compressing = false;
+      const double g = dvy < 0.0 ? vy / -dvy : 0.0;  // where vy = 0 inside the step
+      work_compression = work + 0.5 * dp * g * (2.0 * vy + g * dvy) * ct;
+    }
+    if (!compressing && work + dwork <= (1.0 - e * e) * work_compression) {
+      // The work at a share f of the step is quadratic in f; take its root in [0, 1].
+      const double a = 0.5 * dp * dvy * ct, b = dp * vy * ct;
+      const double target = (1.0 - e * e) * work_compression - work;  // <= 0
+      f = a != 0.0 ? (-b - std::sqrt(std::max(0.0, b * b + 4.0 * a * target))) / (2.0 * a)
+                   : (b != 0.0 ? target / b : 1.0);
+      if (!(f >= 0.0 && f <= 1.0)) f = std::clamp(f, 0.0, 1.0);
+      done = true;
+    }
+    vx += f * dvx;
+    vy += f * dvy;
+    wx += f * dwx;
+    wy += f * dwy;
+    wz += f * dwz;
+    work += f * (dp * vy * ct - 0.5 * f * dp * dvy * ct);
+    if (done) break;
+  }
+  ball->v = vx * ex + vy * ey;  // the slate holds the ball down: no vertical velocity
+  ball->w = wx * ex + wy * ey + wz * ez;
+}
+
 bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball* ball) {
   const Eigen::Vector3d nh(normal.x(), normal.y(), 0.0);
   const double vn = ball->v.dot(nh);
@@ -177,6 +255,9 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
   const PhysicsParams& p = model.params();
   if (p.cushion_model == CushionModel::kMirror) {
     ball->v -= (-vn < kRestingContactSpeed ? 1.0 : 2.0) * vn * nh;
+  } else if (p.cushion_model == CushionModel::kMathavan2010) {
+    CollideCushionMathavan(model, nh, -vn < kRestingContactSpeed ? 0.0 : p.e_cushion_mathavan,
+                           p.f_cushion_mathavan, p.mu_slide, ball);
   } else {
     // The nose touches the ball at angle theta_a above its equator: contact point
     // r_c = R (-cos nh + sin z^), contact normal into the ball n = cos nh - sin z^.

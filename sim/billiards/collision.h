@@ -40,6 +40,13 @@ inline constexpr double kRestingContactSpeed = 1e-3;
 /// approaching along the line of centres faster than kMinApproachSpeed.
 bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 
+/// Mathavan, Jackson and Parkin's (2010) cushion impact (CushionModel::kMathavan2010) with the
+/// coefficients given: restitution `e` at the nose, sliding friction `mu_cushion` at the nose
+/// and `mu_slate` at the slate, over the table's cushion_impulse_steps. `normal` points from the
+/// cushion into the table; the ball must be approaching it. Changes v (horizontal after) and w.
+void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& normal, double e,
+                            double mu_cushion, double mu_slate, Ball* ball);
+
 /// Resolves a resting ball-ball contact (approach below kRestingContactSpeed, or below the
 /// event engine's kTrainContactSpeed when it continues a sustained contact) as a sustained
 /// contact: a finite force, small against the cloth's friction, so a ball that is rolling,

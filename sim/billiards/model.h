@@ -14,6 +14,9 @@
 //   spin-down about 10 rad/s^2, e_b 0.95, e_c 0.85.
 // - W. Leckie, M. Greenspan, "An event-based pool physics simulator", ACG 11 (2006).
 // - I. Han, "Dynamics in carom and three cushion billiards", J. Mech. Sci. Tech. 19 (2005).
+// - S. Mathavan, M. R. Jackson, R. M. Parkin, "A theoretical analysis of billiard ball dynamics
+//   under cushion impacts", Proc. IMechE Part C 224 (2010): restitution 0.98 and ball-cushion
+//   friction 0.14 fitted to their snooker cushion experiments (normal speeds up to ~2.5 m/s).
 #ifndef SPORTSIM_SIM_BILLIARDS_MODEL_H_
 #define SPORTSIM_SIM_BILLIARDS_MODEL_H_
 
@@ -72,6 +75,12 @@ enum class CushionModel : uint8_t {
   kHan,
   /// Mirror: the normal velocity component reverses, nothing else changes (tests).
   kMirror,
+  /// Mathavan, Jackson and Parkin (2010): the impact integrated over the normal impulse at the
+  /// nose, with sliding friction at the nose (f_cushion_mathavan) and at the slate (mu_slide),
+  /// each in the direction of its own slip as it evolves, until the nose's normal work gives
+  /// back e_cushion_mathavan^2 of the compression's (an energetic restitution).
+  /// cushion_impulse_steps sets the integration's accuracy (docs/billiards.md).
+  kMathavan2010,
 };
 
 /// Numeric model parameters, with the typical pool values as defaults. Every field can be set by
@@ -90,6 +99,9 @@ struct PhysicsParams {
   double mu_ball_c_spm = 1.088;        ///< c (s/m) (see mu_ball_a)
   double e_cushion = 0.85;             ///< ball-cushion restitution e_c (along the contact normal)
   double f_cushion = 0.2;              ///< ball-cushion friction coefficient f_c
+  double e_cushion_mathavan = 0.98;    ///< kMathavan2010: energetic restitution at the nose
+  double f_cushion_mathavan = 0.14;    ///< kMathavan2010: ball-cushion sliding friction
+  double cushion_impulse_steps = 500;  ///< kMathavan2010: impulse steps over a (1+e) m v_n impact
   double cushion_height_m = 0.036;     ///< h: cushion nose above the slate (m); R < h < 2R
   double cue_mass_kg = 0.54;           ///< M: cue mass (kg), 19 oz
   double cue_end_mass_kg = 0.170 / 30; ///< m_e: the cue's effective end mass for squirt (kg)

@@ -163,6 +163,14 @@ TEST(BilliardsConvertTest, CushionModelMirror) {
   job = ShotJobFromProto(r);
   ASSERT_TRUE(job.ok()) << job.status();
   EXPECT_EQ(job->table.model.params().cushion_model, b::CushionModel::kHan);
+  r.mutable_table()->set_cushion_model(v1::CUSHION_MODEL_MATHAVAN_2010);
+  (*r.mutable_table()->mutable_params())["cushion_impulse_steps"] = 1000;
+  job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().cushion_model, b::CushionModel::kMathavan2010);
+  EXPECT_EQ(job->table.model.params().cushion_impulse_steps, 1000);
+  (*r.mutable_table()->mutable_params())["cushion_impulse_steps"] = 5;
+  EXPECT_THAT(ShotJobFromProto(r).status().message(), ::testing::HasSubstr("cushion_impulse_steps"));
 }
 
 TEST(BilliardsConvertTest, OtherPresetsTakeTheirGamesRack) {
