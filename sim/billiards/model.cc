@@ -164,9 +164,10 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
   const PocketShape pool_corner{0.116, 142.0, 0.05};
   const PocketShape pool_side{0.129, 104.0, 0.05};
   if (name == "pool-9ft" || name == "pool-8ft" || name == "pool-7ft") {
+    // WPA playing surfaces: 100 x 50, 92 x 46 and 78 x 39 in (within 1/8 in).
     if (name == "pool-9ft") { t.length_m = 2.54; t.width_m = 1.27; }
-    if (name == "pool-8ft") { t.length_m = 2.34; t.width_m = 1.17; }
-    if (name == "pool-7ft") { t.length_m = 1.98; t.width_m = 0.99; }
+    if (name == "pool-8ft") { t.length_m = 2.3368; t.width_m = 1.1684; }
+    if (name == "pool-7ft") { t.length_m = 1.9812; t.width_m = 0.9906; }
     SetBallRadius(t.params.ball_radius_m, &t);
     BuildPocketTable(&t, pool_corner, pool_side);
   } else if (name == "snooker") {

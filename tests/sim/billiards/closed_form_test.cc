@@ -941,6 +941,59 @@ TEST_P(ClosedFormTest, MathavanCushionBouncesInBothEngines) {
   EXPECT_GT(bounce->va.norm(), 0.5 * v_in.norm());
 }
 
+// --- The presets against their governing bodies' specifications. --------------------------------
+//
+// Playing areas, balls and cushion noses within the WPA's (pool: 100 x 50, 92 x 46 and 78 x 39
+// in within 1/8 in; balls 2.25 in +-0.005 in and 5.5-6 oz; nose 62.5-64.5 % of the ball's
+// diameter), the WPBSA's (3569 x 1778 mm +-13 mm; balls 52.5 mm +-0.05 mm) and the UMB's
+// (2840 x 1420 mm +-5 mm; balls 61-61.5 mm and 205-220 g; nose 37 mm +-1 mm); the cloth and
+// ball constants within the ranges of Alciatore's "typical values" FAQ (sliding friction
+// 0.15-0.4, rolling resistance 0.005-0.015, spin-down 5-15 rad/s^2, ball-ball restitution
+// 0.92-0.98, ball-cushion restitution 0.6-0.9).
+TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
+  constexpr double kInch = 0.0254;
+  struct Spec {
+    std::string_view preset;
+    double length_m, width_m, size_tol_m;
+    double diameter_lo_m, diameter_hi_m, mass_lo_kg, mass_hi_kg;
+    double nose_lo_m, nose_hi_m;  // absolute heights
+  };
+  const double d_pool = 2.25 * kInch;
+  const Spec specs[] = {
+      {"pool-9ft", 100 * kInch, 50 * kInch, kInch / 8, d_pool - 0.005 * kInch, d_pool + 0.005 * kInch,
+       0.156, 0.170, 0.625 * d_pool, 0.645 * d_pool},
+      {"pool-8ft", 92 * kInch, 46 * kInch, kInch / 8, d_pool - 0.005 * kInch, d_pool + 0.005 * kInch,
+       0.156, 0.170, 0.625 * d_pool, 0.645 * d_pool},
+      {"pool-7ft", 78 * kInch, 39 * kInch, kInch / 8, d_pool - 0.005 * kInch, d_pool + 0.005 * kInch,
+       0.156, 0.170, 0.625 * d_pool, 0.645 * d_pool},
+      {"snooker", 3.569, 1.778, 0.013, 0.05245, 0.05255, 0.130, 0.160, 0.5 * 0.0525, 0.0525},
+      {"carom", 2.84, 1.42, 0.005, 0.061, 0.0615, 0.205, 0.220, 0.036, 0.038},
+  };
+  for (const Spec& s : specs) {
+    SCOPED_TRACE(s.preset);
+    const TableSpec t = ValueOrDie(MakeTablePreset(s.preset));
+    EXPECT_NEAR(t.length_m, s.length_m, s.size_tol_m);
+    EXPECT_NEAR(t.width_m, s.width_m, s.size_tol_m);
+    const PhysicsParams& p = t.params;
+    EXPECT_GE(2 * p.ball_radius_m, s.diameter_lo_m - 1e-12);
+    EXPECT_LE(2 * p.ball_radius_m, s.diameter_hi_m + 1e-12);
+    EXPECT_GE(p.ball_mass_kg, s.mass_lo_kg);
+    EXPECT_LE(p.ball_mass_kg, s.mass_hi_kg);
+    EXPECT_GE(p.cushion_height_m, s.nose_lo_m - 1e-12);
+    EXPECT_LE(p.cushion_height_m, s.nose_hi_m + 1e-12);
+    EXPECT_GE(p.mu_slide, 0.15);
+    EXPECT_LE(p.mu_slide, 0.4);
+    EXPECT_GE(p.mu_roll, 0.005);
+    EXPECT_LE(p.mu_roll, 0.015);
+    EXPECT_GE(p.spin_decel_rps2, 5.0);
+    EXPECT_LE(p.spin_decel_rps2, 15.0);
+    EXPECT_GE(p.e_ball, 0.92);
+    EXPECT_LE(p.e_ball, 0.98);
+    EXPECT_GE(p.e_cushion, 0.6);
+    EXPECT_LE(p.e_cushion, 0.9);
+  }
+}
+
 // --- The chapter's demonstration scene. -----------------------------------------------------
 //
 // Cue ball 50 diameters back at 7 m/s along +x, no spin; the 8-ball one diameter ahead of the
