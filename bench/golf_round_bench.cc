@@ -82,18 +82,9 @@ absl::StatusOr<RoundStep> Next(const RoundSettings& s, const RoundState& st) {
   const int seat = ToPlay(Links(), s, st);
   const RoundBall& b = st.players[seat].ball;
   const double d = (b.position_m.head<2>() - *Links().Hole(st.hole)->pin_m).norm();
-  RoundStroke k;
-  if (b.lie == Terrain::kGreen || d < 20) {
-    k.kind = RoundStroke::Kind::kPutt;
-    k.speed_mps = std::min(12.0, 1.4 * std::sqrt(1.2 * (d + 0.3)));
-  } else {
-    // Pitches high under 60 m; everything a tenth shorter for each stroke over par on the
-    // hole, so that an over-hit raised green is not tried for ever.
-    const double f = std::pow(0.9, std::max(0, st.players[seat].strokes - Links().Hole(st.hole)->par));
-    k = d < 60 ? Launch(3.6 * std::sqrt(d) * f, 40, 6000)
-               : Launch(std::min(70.0, 4.5 * std::sqrt(d)) * f, 20, 5000);
-  }
-  return PlayStroke(Links(), s, st, seat, k);
+  return PlayStroke(Links(), s, st, seat,
+                    ReferenceStroke(d, b.lie == Terrain::kGreen,
+                                    st.players[seat].strokes - Links().Hole(st.hole)->par));
 }
 
 void BM_Round(benchmark::State& state) {

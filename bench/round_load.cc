@@ -73,14 +73,15 @@ void PlayNext(server::RoundRegistry& reg, R& r, const v1::RoundState& st) {
   v1::PlayStrokeRequest q;
   q.set_round_id(r.id);
   q.set_token(r.tokens[seat]);
-  if (p.ball().lie() == "green" || d < 20) {
-    q.set_putt_speed_mps(std::min(12.0, 1.4 * std::sqrt(1.2 * (d + 0.3))));
+  const golf::RoundStroke k = golf::ReferenceStroke(
+      d, p.ball().lie() == "green", static_cast<int>(p.strokes()) - static_cast<int>(st.par()));
+  if (k.kind == golf::RoundStroke::Kind::kPutt) {
+    q.set_putt_speed_mps(k.speed_mps);
   } else {
-    const double f = std::pow(0.9, std::max(0, static_cast<int>(p.strokes()) - static_cast<int>(st.par())));
     v1::LaunchConditions* l = q.mutable_launch();
-    l->set_ball_speed_mps(d < 60 ? 3.6 * std::sqrt(d) * f : std::min(70.0, 4.5 * std::sqrt(d)) * f);
-    l->set_launch_angle_deg(d < 60 ? 40 : 20);
-    l->set_spin_rpm(d < 60 ? 6000 : 5000);
+    l->set_ball_speed_mps(k.launch.ball_speed_mps);
+    l->set_launch_angle_deg(k.launch.launch_angle_deg);
+    l->set_spin_rpm(k.launch.spin_rpm);
   }
   (void)reg.Stroke(q);
 }

@@ -196,8 +196,7 @@ void RoundStateToProto(const golf::Course& course, const golf::RoundSettings& se
     case golf::MaxScore::Kind::kNetDoubleBogey: out->set_max_score("net_double_bogey"); break;
     case golf::MaxScore::Kind::kNone: break;
   }
-  out->set_handicaps(std::any_of(settings.players.begin(), settings.players.end(),
-                                 [](const golf::RoundPlayerSpec& p) { return p.handicap_index.has_value(); }));
+  out->set_handicaps(golf::HasHandicaps(settings));
 }
 
 absl::StatusOr<golf::RoundSettings> RoundSettingsFromProto(const v1::CreateRoundRequest& r,

@@ -410,8 +410,7 @@ class Referee {
   // the most points.
   std::vector<int> Leaders() const {
     const RoundState& st = step_.state;
-    const bool net = std::any_of(settings_.players.begin(), settings_.players.end(),
-                                 [](const RoundPlayerSpec& p) { return p.handicap_index.has_value(); });
+    const bool net = HasHandicaps(settings_);
     std::vector<int> out;
     int best = 0;
     for (size_t i = 0; i < st.players.size(); ++i) {
@@ -695,6 +694,30 @@ int RoundPlayer::Points() const {
 }
 
 // --- handicaps and scores ---------------------------------------------------------------------
+
+bool HasHandicaps(const RoundSettings& settings) {
+  return std::any_of(settings.players.begin(), settings.players.end(),
+                     [](const RoundPlayerSpec& p) { return p.handicap_index.has_value(); });
+}
+
+RoundStroke ReferenceStroke(double d, bool on_green, int strokes_over_par) {
+  RoundStroke k;
+  if (on_green || d < 20) {
+    k.kind = RoundStroke::Kind::kPutt;
+    // Struck, a putt rolls at 5/7 of its speed; a stimp-10 green takes about 0.6 m/s^2.
+    k.speed_mps = std::min(12.0, 1.4 * std::sqrt(1.2 * (d + 0.3)));
+    return k;
+  }
+  const double f = std::pow(0.9, std::max(0, strokes_over_par));
+  const bool pitch = d < 60;
+  k.launch = LaunchConditions{.ball_speed_mps = pitch ? 3.6 * std::sqrt(d) * f
+                                                      : std::min(70.0, 4.5 * std::sqrt(d)) * f,
+                              .launch_angle_deg = pitch ? 40.0 : 20.0,
+                              .launch_direction_deg = 0,
+                              .spin_rpm = pitch ? 6000.0 : 5000.0,
+                              .spin_axis_deg = 0};
+  return k;
+}
 
 double CourseHandicap(const Course& course, std::string_view tee, double handicap_index) {
   const CourseRating r = course.RatingOf(tee);

@@ -110,6 +110,9 @@ struct RoundSettings {
   BallSpec ball;
 };
 
+/// Net scoring: some player has a Handicap Index.
+bool HasHandicaps(const RoundSettings& settings);
+
 /// Validates the settings against the course: holes in range and in order, 1-8 players with
 /// names, each player's tee a tee of some hole played, noise in [0, 5]. InvalidArgument names
 /// the field.
@@ -340,6 +343,13 @@ struct MatchStatus {
 MatchStatus MatchStatusOf(const RoundSettings& settings, const RoundState& state);
 /// "all square with 3 to play", "Ann 2 up with 1 to play (dormie)", "Ann won 3 and 2".
 std::string MatchStatusText(const RoundSettings& settings, const RoundState& state);
+
+/// A plain reference player (benches, load tools, tests), aimed at the pin: on the green or
+/// within 20 m a putt at the speed that rolls about to the hole on a stimp-10 green; under 60 m
+/// a 40-degree pitch; beyond, a 20-degree full shot sized by the distance (at most 70 m/s). A
+/// tenth shorter for each stroke over par, so that an over-hit raised green is not tried for
+/// ever.
+RoundStroke ReferenceStroke(double distance_m, bool on_green, int strokes_over_par);
 
 /// The area of the course (Rule 2.2) of a lie at a spot, for the hole being played: tees and
 /// greens of other holes are general area.

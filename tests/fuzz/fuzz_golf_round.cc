@@ -98,8 +98,7 @@ void Check(const golf::Course& c, const golf::RoundSettings& s, const golf::Roun
   } else if (st.over) {
     FUZZ_CHECK(st.result == "finished" && !st.winners.empty(), "after %s: a round over without "
                "winners", after);
-    const bool net = std::any_of(s.players.begin(), s.players.end(),
-                                 [](const golf::RoundPlayerSpec& p) { return p.handicap_index.has_value(); });
+    const bool net = golf::HasHandicaps(s);
     auto key = [&](const golf::RoundPlayer& p) {
       return s.play == golf::PlayFormat::kStableford ? -p.Points() : (net ? p.NetTotal() : p.Total());
     };

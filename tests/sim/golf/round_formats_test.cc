@@ -38,20 +38,12 @@ RoundStroke Launch(double speed, double angle, double spin) {
 // A tiny chip: the ball moves a few metres at most (a wasted stroke).
 RoundStroke Dribble() { return Launch(3.0, 20.0, 1000.0); }
 
-// A fixed policy toward the pin: putts on and near the green, pitches under 60 m, full shots
-// beyond; shorter for each stroke over par so a raised green is not over-hit for ever.
+// The reference player's stroke for the seat's ball.
 RoundStroke Policy(const RoundState& st, int seat) {
   const RoundBall& b = st.players[seat].ball;
   const double d = (b.position_m.head<2>() - *Links().Hole(st.hole)->pin_m).norm();
-  if (b.lie == Terrain::kGreen || d < 20) {
-    RoundStroke k;
-    k.kind = RoundStroke::Kind::kPutt;
-    k.speed_mps = std::min(12.0, 1.4 * std::sqrt(1.2 * (d + 0.3)));
-    return k;
-  }
-  const double f = std::pow(0.9, std::max(0, st.players[seat].strokes - Links().Hole(st.hole)->par));
-  return d < 60 ? Launch(3.6 * std::sqrt(d) * f, 40, 6000)
-                : Launch(std::min(70.0, 4.5 * std::sqrt(d)) * f, 20, 5000);
+  return ReferenceStroke(d, b.lie == Terrain::kGreen,
+                         st.players[seat].strokes - Links().Hole(st.hole)->par);
 }
 
 RoundState Step(const RoundSettings& s, const RoundState& st, int seat, const RoundStroke& k,
