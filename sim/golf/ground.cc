@@ -463,8 +463,21 @@ bool Run::Hop() {
       const double s = lo + std::min(5e-3, 0.1 / std::max(v, 1e-3));
       const Vector3d c = at(s);
       if (ground_.ZoneAt(c.x(), c.y()) == Ground::kOffMap) {
-        off_map = true;
-        hi = s;
+        // Past the map's edge by this probe: where the centre crossed it (bisection), and
+        // whether the ball met the ground before that (then it lands on the map as usual,
+        // rather than leaving it from under the ground).
+        double in = lo, out = s;
+        for (int k = 0; k < 60 && out - in > 1e-12; ++k) {
+          const double mid = 0.5 * (in + out);
+          const Vector3d p = at(mid);
+          (ground_.ZoneAt(p.x(), p.y()) == Ground::kOffMap ? out : in) = mid;
+        }
+        if (clearance(in) <= 0.0) {
+          hi = in;
+        } else {
+          off_map = true;
+          hi = out;
+        }
         break;
       }
       if (clearance(s) <= 0.0) {

@@ -1,7 +1,10 @@
 // The ground phase on a course's terrain and surfaces (ground.h SimulateGroundOnCourse).
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -204,6 +207,85 @@ TEST(CourseGroundTest, OutOfBoundsWhereTheWholeBallIsOut) {
   ASSERT_NE(e, nullptr);
   // The event's point is the contact point; its centre is over (x, y) on the flat-ish rough.
   EXPECT_NEAR(e->position_m.y(), 316 + r, 2e-4);
+}
+
+// The distance (m) the point (x, y) lies outside the map (0 on or inside it), and the ground's
+// height where it left (the nearest point of the map).
+double PastTheEdge(const Heightfield& h, double x, double y) {
+  return std::hypot(x - std::clamp(x, h.x0_m, h.x1_m()), y - std::clamp(y, h.y0_m, h.y1_m()));
+}
+double HeightAtTheEdge(const Heightfield& h, double x, double y) {
+  return h.HeightAt(std::clamp(x, h.x0_m, h.x1_m()), std::clamp(y, h.y0_m, h.y1_m()));
+}
+
+// Fast, flat, heavily spun landings anywhere in play, heading for the nearest edge of the map,
+// bounce and skip along, and many leave the map. A run that leaves it ends where the ball's
+// centre crosses the edge (to a micrometre), never under the ground there: a hop that meets
+// the ground before its centre leaves the map lands on the map. No sample over the map lies
+// under the ground (the tangent-plane contact's half millimetre on curved ground).
+TEST(CourseGroundTest, BallsLeaveTheMapAtItsEdgeAndNeverUnderTheGround) {
+  const Course& c = Links();
+  const Heightfield& h = c.terrain;
+  const double r = BallSpec{}.radius_m();
+  const double x0 = h.x0_m, x1 = h.x1_m(), y0 = h.y0_m, y1 = h.y1_m();
+  std::vector<GroundStart> starts;
+  {
+    // A skipping ball, found by the fuzzer: its last hop met the ground 5 mm before the edge
+    // and the run ended under the ground past it.
+    GroundStart s;
+    s.kind = GroundStartKind::kLanding;
+    s.position_m = Eigen::Vector3d(-133.68626039016306, 46.481019968450894, 0);
+    s.velocity_mps = Eigen::Vector3d(-68.637330067196046, -59.999999999897867, -60);
+    s.spin_radps = Eigen::Vector3d(-1500, -1500, -500);
+    starts.push_back(s);
+  }
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  while (starts.size() < 300) {
+    const double x = x0 + (x1 - x0) * u(rng), y = y0 + (y1 - y0) * u(rng);
+    if (c.LieAt(x, y, r) == Terrain::kOutOfBounds || IsPenaltyArea(c.SurfaceAt(x, y).terrain)) continue;
+    const double to_edge[4] = {x - x0, x1 - x, y - y0, y1 - y};
+    const int edge = static_cast<int>(std::min_element(to_edge, to_edge + 4) - to_edge);
+    const double heading = (edge == 0 ? 180 : edge == 1 ? 0 : edge == 2 ? 270 : 90) + 60 * (u(rng) - 0.5);
+    const double v = 40 + 60 * u(rng), d = (3 + 30 * u(rng)) * kDeg;
+    GroundStart s;
+    s.kind = GroundStartKind::kLanding;
+    s.position_m = Eigen::Vector3d(x, y, 0);
+    s.velocity_mps = v * Eigen::Vector3d(std::cos(d) * std::cos(heading * kDeg),
+                                         std::cos(d) * std::sin(heading * kDeg), -std::sin(d));
+    s.spin_radps = Eigen::Vector3d(3000 * (u(rng) - 0.5), 3000 * (u(rng) - 0.5), 1000 * (u(rng) - 0.5));
+    starts.push_back(s);
+  }
+  int left_the_map = 0;
+  for (size_t i = 0; i < starts.size(); ++i) {
+    GroundOptions o;
+    o.sample_interval_s = 1e-3;
+    auto res = SimulateGroundOnCourse(BallSpec{}, c, 1, Hole{}, starts[i], o);
+    if (!res.ok()) {  // a flat landing on ground that falls away faster: it would not land
+      ASSERT_THAT(std::string(res.status().message()), ::testing::HasSubstr("into the ground"));
+      continue;
+    }
+    ASSERT_FALSE(res->events.empty());
+    EXPECT_EQ(res->events.back().kind, GroundEventKind::kRest) << i;
+    // The ball's centre at the end: R along the normal above the contact point.
+    const Eigen::Vector3d& end = res->rest_m;
+    const Eigen::Vector3d centre =
+        end + r * h.NormalAt(std::clamp(end.x(), x0, x1), std::clamp(end.y(), y0, y1));
+    const double inside =
+        std::min({centre.x() - x0, x1 - centre.x(), centre.y() - y0, y1 - centre.y()});
+    if (inside < 1e-6) {  // it left the map
+      ++left_the_map;
+      EXPECT_TRUE(res->out_of_bounds) << i;
+      EXPECT_LT(PastTheEdge(h, centre.x(), centre.y()), 1e-6) << i;
+      EXPECT_GE(end.z() - HeightAtTheEdge(h, end.x(), end.y()), -5e-4) << i;
+    }
+    for (const GroundSample& s : res->samples) {
+      if (!h.Covers(s.position_m.x(), s.position_m.y())) continue;
+      ASSERT_GE(s.position_m.z() - h.HeightAt(s.position_m.x(), s.position_m.y()), -5e-4)
+          << i << " at t " << s.t_s;
+    }
+  }
+  EXPECT_GT(left_the_map, 100);
 }
 
 TEST(CourseGroundTest, TheSameShotGivesBitIdenticalResults) {
