@@ -1,0 +1,828 @@
+#include "sim/billiards/calibrate.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "unsupported/Eigen/LevenbergMarquardt"
+
+namespace sportsim::billiards {
+namespace {
+
+using Eigen::VectorXd;
+
+// A parameter's unbounded coordinate u and its value lo + (hi - lo) / (1 + exp(-u)).
+double FromU(double u, double lo, double hi) { return lo + (hi - lo) / (1.0 + std::exp(-u)); }
+double ToU(double p, double lo, double hi) {
+  const double f = std::clamp((p - lo) / (hi - lo), 1e-6, 1.0 - 1e-6);
+  return std::log(f / (1.0 - f));
+}
+
+// Forward-difference step in the unbounded coordinates. The engine's positions are smooth in
+// its inputs between changes of its event sequence, and rounding leaves them good to ~1e-15
+// m, so a small step costs little accuracy.
+constexpr double kDiffStep = 1e-6;
+// The table's parameters change every ball's path at once, and small kinks (a graze that
+// turns into a contact, a ball stopping just before or after it is hit) make the score rough
+// in them at the scale of 1e-4 of their coordinate: their differences take a step larger than
+// that roughness, so that the Jacobian follows the trend a fit's steps see.
+constexpr double kParamDiffStep = 1e-3;
+// LM iterations of a strike's refit to new table parameters (from its fit to the last ones).
+constexpr int kRefitIterations = 10;
+// Passes of the calibration's fit (LM on the parameters, then fresh strike fits).
+constexpr int kPasses = 4;
+// The residual of every point of a shot whose simulation failed (m): large, so that the fit
+// steps back from where the engine refuses or runs away.
+constexpr double kFailedResidual = 10.0;
+
+// Median of a list (0 when empty).
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// The number of a recording's tracked points with t_s <= until_s (the track is in order).
+int PointsUntil(const Recording& rec, double until_s) {
+  return static_cast<int>(std::upper_bound(rec.track.begin(), rec.track.end(), until_s,
+                                           [](double t, const TrackPoint& p) { return t < p.t_s; }) -
+                          rec.track.begin());
+}
+
+// Plays `strike` on the recording's table and writes the first `n` points' residuals (the
+// simulated centre minus the tracked position, times `weight`) into out[0 .. 2n).
+absl::Status ShotResiduals(const TableModel& model, const SolverOptions& solver,
+                           const Recording& rec, const CueStrike& strike, int n, double weight,
+                           double* out) {
+  TableState state = rec.initial;
+  absl::StatusOr<StrikeOutcome> struck = ApplyStrike(model, solver.effects, strike, rec.cue, &state);
+  if (!struck.ok()) return struck.status();
+  std::vector<Event> events;
+  absl::StatusOr<std::unique_ptr<TableSimulation>> sim =
+      TableSimulation::Create(model, solver, std::move(state), &events);
+  if (!sim.ok()) return sim.status();
+  for (int i = 0; i < n; ++i) {
+    const TrackPoint& p = rec.track[static_cast<size_t>(i)];
+    if (p.t_s > (*sim)->time()) {
+      events.clear();
+      if (absl::Status s = (*sim)->AdvanceTo(p.t_s, &events); !s.ok()) return s;
+    }
+    const Eigen::Vector3d& r = (*sim)->state().balls[static_cast<size_t>(p.ball)].r;
+    out[2 * i] = weight * (r.x() - p.xy.x());
+    out[2 * i + 1] = weight * (r.y() - p.xy.y());
+  }
+  return absl::OkStatus();
+}
+
+ShotError ErrorOf(const double* residuals, int n) {
+  ShotError e;
+  e.points = n;
+  double sum = 0.0, sum2 = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double d2 = residuals[2 * i] * residuals[2 * i] + residuals[2 * i + 1] * residuals[2 * i + 1];
+    const double d = std::sqrt(d2);
+    sum += d;
+    sum2 += d2;
+    e.max_m = std::max(e.max_m, d);
+  }
+  if (n > 0) {
+    e.mean_m = sum / n;
+    e.rms_m = std::sqrt(sum2 / n);
+  }
+  return e;
+}
+
+// The budget and the cancellation, shared by every simulation of a calibration.
+class Budget {
+ public:
+  Budget(int64_t max_simulations, const std::function<bool()>* cancelled)
+      : max_(max_simulations), cancelled_(cancelled) {}
+  // One more simulation, or why not.
+  absl::Status Take() {
+    if (cancelled_ != nullptr && *cancelled_ && (*cancelled_)()) {
+      return absl::CancelledError("the calibration was cancelled");
+    }
+    if (++used_ > max_) {
+      return absl::ResourceExhaustedError(
+          absl::StrFormat("max_simulations: the calibration needs more than %d simulations", max_));
+    }
+    return absl::OkStatus();
+  }
+  int64_t used() const { return used_; }
+
+ private:
+  int64_t max_;
+  int64_t used_ = 0;
+  const std::function<bool()>* cancelled_;
+};
+
+// A strike's unbounded coordinates: the cue ball's speed (logistic onto its bounds), its
+// heading, the two tip offsets and (when fitted) the elevation. An offset is the limit times
+// the sine of its coordinate (periodic: a fit never stalls against a bound, as it can on a
+// logistic map's flat tails), and a pair outside the miscue circle is scaled back onto it.
+struct StrikeMap {
+  StrikeBounds bounds;
+  double offset_limit = 0.5;  // just inside the miscue limit
+
+  int size() const { return bounds.fit_elevation ? 5 : 4; }
+  double max_theta() const { return bounds.max_elevation_deg * std::numbers::pi / 180.0; }
+  CueStrike ToStrike(const double* u) const {
+    CueStrike s;
+    s.ball_speed = true;
+    s.speed_mps = FromU(u[0], bounds.min_speed_mps, bounds.max_speed_mps);
+    s.phi_rad = u[1];
+    s.a = offset_limit * std::sin(u[2]);
+    s.b = offset_limit * std::sin(u[3]);
+    const double r = std::hypot(s.a, s.b);
+    if (r > offset_limit) {
+      s.a *= offset_limit / r;
+      s.b *= offset_limit / r;
+    }
+    if (bounds.fit_elevation) s.theta_rad = max_theta() * 0.5 * (1.0 - std::cos(u[4]));
+    return s;
+  }
+  void FromStrike(const CueStrike& s, double* u) const {
+    u[0] = ToU(s.speed_mps, bounds.min_speed_mps, bounds.max_speed_mps);
+    u[1] = s.phi_rad;
+    u[2] = std::asin(std::clamp(s.a / offset_limit, -1.0, 1.0));
+    u[3] = std::asin(std::clamp(s.b / offset_limit, -1.0, 1.0));
+    if (bounds.fit_elevation) {
+      u[4] = std::acos(std::clamp(1.0 - 2.0 * std::max(s.theta_rad, 1e-3) / max_theta(), -1.0, 1.0));
+    }
+  }
+};
+
+// The cue ball's first tracked motion: its heading from where it stood to the first point a
+// centimetre away, and its speed there with the sliding friction's loss added back. nullopt
+// when the cue ball's track never leaves its spot.
+std::optional<std::pair<double, double>> FirstMotion(const TableModel& model, const Recording& rec) {
+  const Eigen::Vector2d start = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
+  for (const TrackPoint& p : rec.track) {
+    if (p.ball != rec.cue || p.t_s <= 0.0) continue;
+    const Eigen::Vector2d d = p.xy - start;
+    if (d.norm() < 0.01) continue;
+    const double speed = d.norm() / p.t_s + 0.5 * model.params().mu_slide * model.params().gravity_mps2 * p.t_s;
+    return std::make_pair(std::atan2(d.y(), d.x()), speed);
+  }
+  return std::nullopt;
+}
+
+// Levenberg-Marquardt over a residual function of the unbounded coordinates, with its Jacobian
+// by forward differences (or a block-structured one given by the caller).
+struct LmFunctor : Eigen::DenseFunctor<double> {
+  LmFunctor(int inputs, int values) : Eigen::DenseFunctor<double>(inputs, values) {}
+  std::function<absl::Status(const VectorXd&, VectorXd*)> residuals;
+  std::function<absl::Status(const VectorXd&, const VectorXd&, Eigen::MatrixXd*)> jacobian;
+  absl::Status status;
+  VectorXd last_x, last_f;
+
+  int operator()(const VectorXd& x, VectorXd& f) {
+    status = residuals(x, &f);
+    if (!status.ok()) return -1;
+    last_x = x;
+    last_f = f;
+    return 0;
+  }
+  int df(const VectorXd& x, Eigen::MatrixXd& j) {
+    VectorXd f0;
+    if (last_x.size() == x.size() && last_x == x) {
+      f0 = last_f;
+    } else {
+      f0.resize(values());
+      if (status = residuals(x, &f0); !status.ok()) return -1;
+    }
+    status = jacobian(x, f0, &j);
+    return status.ok() ? 0 : -1;
+  }
+};
+
+// Runs LM from x; returns the iterations done. Stops on the functor's error (returned).
+absl::StatusOr<int> Minimize(LmFunctor& functor, VectorXd* x, int max_iterations) {
+  Eigen::LevenbergMarquardt<LmFunctor> lm(functor);
+  lm.setMaxfev(std::max(1, max_iterations) * 4);
+  lm.setXtol(1e-10);
+  lm.setFtol(1e-10);
+  Eigen::LevenbergMarquardtSpace::Status s = lm.minimizeInit(*x);
+  if (s == Eigen::LevenbergMarquardtSpace::ImproperInputParameters) {
+    return absl::InvalidArgumentError("too few tracked points for the parameters fitted");
+  }
+  int iterations = 0;
+  while (s == Eigen::LevenbergMarquardtSpace::NotStarted || s == Eigen::LevenbergMarquardtSpace::Running) {
+    if (iterations >= max_iterations) break;
+    s = lm.minimizeOneStep(*x);
+    ++iterations;
+  }
+  if (s == Eigen::LevenbergMarquardtSpace::UserAsked && !functor.status.ok()) return functor.status;
+  // minimizeOneStep leaves x at the best point it accepted.
+  return iterations;
+}
+
+// A shot's fit context: the residual count and weight of the points it is fitted on.
+struct ShotPoints {
+  int n = 0;
+  double weight = 0.0;
+};
+ShotPoints PointsOf(const Recording& rec, double until_s) {
+  ShotPoints p;
+  p.n = PointsUntil(rec, until_s);
+  p.weight = p.n > 0 ? 1.0 / std::sqrt(static_cast<double>(p.n)) : 0.0;
+  return p;
+}
+
+// Residuals of one shot, with a failed simulation's large ones in place of an error (budget and
+// cancellation errors pass through).
+absl::Status Simulate(const TableModel& model, const SolverOptions& solver, const Recording& rec,
+                      const CueStrike& strike, const ShotPoints& pts, Budget* budget, double* out) {
+  if (absl::Status s = budget->Take(); !s.ok()) return s;
+  if (!ShotResiduals(model, solver, rec, strike, pts.n, pts.weight, out).ok()) {
+    std::fill(out, out + 2 * pts.n, kFailedResidual * pts.weight);
+  }
+  return absl::OkStatus();
+}
+
+// The windows a strike is fitted over in turn: the first 0.25 s of the track, doubled until
+// the whole window. A shot's collisions make the score rugged in the strike (a slightly other
+// heading misses a ball): fitted on its first motion only, before the first collisions, the
+// strike is close enough that each longer window's fit starts in the right basin.
+std::vector<double> Windows(const Recording& rec, double until_s) {
+  const double end = std::min(until_s, rec.track.back().t_s);
+  std::vector<double> w;
+  for (double t = 0.25; t < end; t *= 2.0) w.push_back(t);
+  w.push_back(until_s);
+  return w;
+}
+
+// LM over a strike's coordinates u on a recording's points up to `window`. With a prior (the
+// early windows of FitStrike) a weak pull toward its tip offsets (kTipPrior: a unit of the
+// offsets' coordinates weighs as a millimetre of error) keeps them from wandering along the
+// directions the data leaves flat: the spin barely shows before the cushions.
+constexpr double kTipPrior = 1e-3;
+constexpr int kStrikeIterations = 30;  // LM iterations of a strike's fit on one window
+absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, const Recording& rec,
+                          const StrikeMap& map, double window, const VectorXd* prior,
+                          int iterations, Budget* budget, VectorXd* u) {
+  const int k = map.size();
+  const ShotPoints pts = PointsOf(rec, window);
+  if (2 * pts.n < k) return absl::OkStatus();  // too early to say anything: keep the start
+  const int extra = prior != nullptr ? 2 : 0;
+  auto residuals = [&](const VectorXd& x, double* r) {
+    if (absl::Status s = Simulate(model, solver, rec, map.ToStrike(x.data()), pts, budget, r); !s.ok()) {
+      return s;
+    }
+    if (prior != nullptr) {
+      r[2 * pts.n] = kTipPrior * (x[2] - (*prior)[2]);
+      r[2 * pts.n + 1] = kTipPrior * (x[3] - (*prior)[3]);
+    }
+    return absl::OkStatus();
+  };
+  LmFunctor f(k, 2 * pts.n + extra);
+  f.residuals = [&](const VectorXd& x, VectorXd* r) { return residuals(x, r->data()); };
+  f.jacobian = [&](const VectorXd& x, const VectorXd& r0, Eigen::MatrixXd* j) {
+    VectorXd xp = x, r(r0.size());
+    for (int c = 0; c < k; ++c) {
+      xp[c] = x[c] + kDiffStep;
+      if (absl::Status s = residuals(xp, r.data()); !s.ok()) return s;
+      j->col(c) = (r - r0) / kDiffStep;
+      xp[c] = x[c];
+    }
+    return absl::OkStatus();
+  };
+  return Minimize(f, u, iterations).status();
+}
+
+// FitStrike's work, on a budget.
+absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptions& solver,
+                                      const Recording& rec, const StrikeBounds& bounds,
+                                      double until_s, Budget* budget) {
+  StrikeFit best;
+  const int64_t used0 = budget->used();
+  const ShotPoints all = PointsOf(rec, until_s);
+  if (all.n == 0) return absl::InvalidArgumentError("track: no points in the fitted window");
+  StrikeMap map{bounds, 0.999 * model.params().miscue_limit};
+  const int k = map.size();
+  if (2 * all.n < k) return absl::InvalidArgumentError("track: too few points to fit the strike");
+  const std::optional<std::pair<double, double>> motion = FirstMotion(model, rec);
+  if (!motion) {
+    return absl::InvalidArgumentError("track: the cue ball's track never leaves its spot (1 cm)");
+  }
+  // Starts: the first motion's heading and speed with the tip on a grid of side offsets (the
+  // side is hard to tell from the first motion: squirt and heading trade against each other
+  // until the cushions show the spin) and of heights; each fitted over the growing windows.
+  const double l = model.params().miscue_limit;
+  std::vector<std::pair<double, double>> tips;
+  for (double a : {0.0, 0.3 * l, -0.3 * l, 0.6 * l, -0.6 * l}) {
+    for (double b : {0.0, 0.5 * l, -0.5 * l}) tips.emplace_back(a, b);
+  }
+  const std::vector<double> windows = Windows(rec, until_s);
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (const auto& [a, b] : tips) {
+    CueStrike s0;
+    s0.ball_speed = true;
+    s0.speed_mps = std::clamp(motion->second, bounds.min_speed_mps * 1.01, bounds.max_speed_mps * 0.99);
+    s0.phi_rad = motion->first;
+    s0.a = a;
+    s0.b = b;
+    VectorXd u(k);
+    map.FromStrike(s0, u.data());
+    const VectorXd u0 = u;
+    for (size_t w = 0; w < windows.size(); ++w) {
+      const bool last = w + 1 == windows.size();
+      if (absl::Status s = RefineStrike(model, solver, rec, map, windows[w], last ? nullptr : &u0,
+                                        kStrikeIterations, budget, &u);
+          !s.ok()) {
+        return s;
+      }
+    }
+    VectorXd r(2 * all.n);
+    if (absl::Status s = Simulate(model, solver, rec, map.ToStrike(u.data()), all, budget, r.data()); !s.ok()) {
+      return s;
+    }
+    const double cost = r.squaredNorm();
+    if (cost < best_cost) {
+      best_cost = cost;
+      best.strike = map.ToStrike(u.data());
+      for (int i = 0; i < all.n; ++i) r.segment(2 * i, 2) /= all.weight;
+      best.error = ErrorOf(r.data(), all.n);
+    }
+  }
+  best.strike.phi_rad = std::remainder(best.strike.phi_rad, 2.0 * std::numbers::pi);
+  best.simulations = budget->used() - used0;
+  return best;
+}
+
+absl::Status CheckOptions(const StrikeBounds& b) {
+  if (!(b.min_speed_mps > 0.0) || !(b.max_speed_mps > b.min_speed_mps) ||
+      !(b.max_speed_mps <= kMaxStrikeSpeed)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "strike_bounds: speeds must satisfy 0 < min < max <= %g m/s", kMaxStrikeSpeed));
+  }
+  if (b.fit_elevation && !(b.max_elevation_deg > 0.0 && b.max_elevation_deg <= kMaxElevationDeg)) {
+    return absl::InvalidArgumentError("strike_bounds.max_elevation_deg must be in (0, 89]");
+  }
+  return absl::OkStatus();
+}
+
+}  // namespace
+
+absl::Status ValidateRecording(const TableModel& model, const Recording& rec) {
+  if (absl::Status s = ValidateLayout(model, rec.initial); !s.ok()) {
+    return absl::InvalidArgumentError(absl::StrCat("initial: ", s.message()));
+  }
+  const int balls = static_cast<int>(rec.initial.balls.size());
+  for (const Ball& b : rec.initial.balls) {
+    if (b.pocket < 0 && (b.v.squaredNorm() != 0.0 || b.w.squaredNorm() != 0.0)) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("initial: ball \"%s\" must be at rest before the strike", b.id.substr(0, 16)));
+    }
+  }
+  if (rec.cue < 0 || rec.cue >= balls || rec.initial.balls[static_cast<size_t>(rec.cue)].pocket >= 0) {
+    return absl::InvalidArgumentError(absl::StrFormat("cue: %d is not a ball on the table", rec.cue));
+  }
+  if (rec.track.empty()) return absl::InvalidArgumentError("track: no tracked points");
+  double t_prev = 0.0;
+  for (size_t i = 0; i < rec.track.size(); ++i) {
+    const TrackPoint& p = rec.track[i];
+    if (!std::isfinite(p.t_s) || p.t_s < 0.0 || p.t_s > 3600.0) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("track[%d].t_s must be finite and in [0, 3600] s, got %g", i, p.t_s));
+    }
+    if (p.t_s < t_prev) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "track[%d].t_s: points must be in time order (%g after %g)", i, p.t_s, t_prev));
+    }
+    t_prev = p.t_s;
+    if (p.ball < 0 || p.ball >= balls) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("track[%d].ball: %d is not a ball of the table (0..%d)", i, p.ball, balls - 1));
+    }
+    if (!p.xy.allFinite() || std::abs(p.xy.x()) > 100.0 || std::abs(p.xy.y()) > 100.0) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("track[%d].xy must be finite and within 100 m", i));
+    }
+  }
+  if (rec.strike) {
+    if (absl::StatusOr<StrikeOutcome> s = ComputeStrike(model, 0, *rec.strike); !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrCat("strike: ", s.status().message()));
+    }
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions& solver,
+                                    const Recording& rec, const CueStrike& strike, double until_s) {
+  if (absl::Status s = ValidateRecording(model, rec); !s.ok()) return s;
+  const int n = PointsUntil(rec, until_s);
+  std::vector<double> r(static_cast<size_t>(2 * n));
+  if (absl::Status s = ShotResiduals(model, solver, rec, strike, n, 1.0, r.data()); !s.ok()) return s;
+  return ErrorOf(r.data(), n);
+}
+
+absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions& solver,
+                                    const Recording& rec, const StrikeBounds& bounds,
+                                    double until_s) {
+  if (absl::Status s = ValidateRecording(model, rec); !s.ok()) return s;
+  if (absl::Status s = CheckOptions(bounds); !s.ok()) return s;
+  Budget budget(std::numeric_limits<int64_t>::max(), nullptr);
+  return FitStrikeOn(model, solver, rec, bounds, until_s, &budget);
+}
+
+std::optional<std::pair<double, double>> CalibrationRange(std::string_view name) {
+  // Alciatore, "typical physical properties" FAQ (billiards.colostate.edu): sliding friction
+  // 0.15-0.4, rolling resistance 0.005-0.015 (pool cloth; the range is widened down to 0.002
+  // here because heated carom cloth is faster), spin-down 5-15 rad/s^2, ball-ball restitution
+  // 0.92-0.98, ball-cushion restitution 0.6-0.9 (up to 0.98: Mathavan et al. 2010 measured
+  // 0.98 at the nose). Cushion friction: around Mathavan's measured 0.14 and Han's 0.2.
+  struct Range {
+    std::string_view name;
+    double lo, hi;
+  };
+  static constexpr Range kRanges[] = {
+      {"mu_slide", 0.15, 0.4},          {"mu_roll", 0.002, 0.015},
+      {"spin_decel_rps2", 5.0, 15.0},   {"e_ball", 0.92, 0.98},
+      {"e_cushion", 0.6, 0.98},         {"f_cushion", 0.05, 0.35},
+      {"e_cushion_mathavan", 0.6, 0.99}, {"f_cushion_mathavan", 0.05, 0.35},
+  };
+  for (const Range& r : kRanges) {
+    if (r.name == name) return std::make_pair(r.lo, r.hi);
+  }
+  return std::nullopt;
+}
+
+namespace {
+
+// A parameter to fit: its field and bounds.
+struct Fitted {
+  const ParamInfo* info;
+  double lo, hi;
+};
+
+// A calibration's inputs, checked, resolved.
+struct Prepared {
+  TableModel model0;
+  std::vector<bool> heldout;
+  std::vector<Fitted> fitted;
+};
+
+absl::StatusOr<Prepared> Prepare(const TableSpec& spec, const SolverOptions& solver,
+                                 std::span<const Recording> recordings,
+                                 const CalibrationOptions& options) {
+  absl::StatusOr<TableModel> model0 = TableModel::Create(spec);
+  if (!model0.ok()) return model0.status();
+  if (absl::Status s = ValidateSolverOptions(solver); !s.ok()) return s;
+  if (absl::Status s = CheckOptions(options.strike_bounds); !s.ok()) return s;
+  if (recordings.empty()) return absl::InvalidArgumentError("recordings: none given");
+  if (options.max_iterations < 1 || options.max_iterations > 1000) {
+    return absl::InvalidArgumentError("max_iterations must be in [1, 1000]");
+  }
+  if (options.max_simulations < 1) return absl::InvalidArgumentError("max_simulations must be >= 1");
+  if (!(options.strike_window_s > 0.0)) {
+    return absl::InvalidArgumentError("strike_window_s must be > 0");
+  }
+  const int shots = static_cast<int>(recordings.size());
+  for (int i = 0; i < shots; ++i) {
+    if (absl::Status s = ValidateRecording(*model0, recordings[static_cast<size_t>(i)]); !s.ok()) {
+      return absl::InvalidArgumentError(absl::StrFormat("recordings[%d].%s", i, s.message()));
+    }
+  }
+  std::vector<bool> heldout(static_cast<size_t>(shots), false);
+  for (int h : options.heldout) {
+    if (h < 0 || h >= shots) {
+      return absl::InvalidArgumentError(absl::StrFormat("heldout: %d is not a recording (0..%d)", h, shots - 1));
+    }
+    heldout[static_cast<size_t>(h)] = true;
+  }
+  // The parameters: their fields and bounds.
+  std::vector<Fitted> fitted;
+  for (const FitParam& p : options.params) {
+    const ParamInfo* info = nullptr;
+    for (const ParamInfo& i : ParamInfos()) {
+      if (i.name == p.name) info = &i;
+    }
+    if (info == nullptr) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("params: unknown parameter \"%s\"", p.name.substr(0, 32)));
+    }
+    for (const Fitted& f : fitted) {
+      if (f.info == info) return absl::InvalidArgumentError(absl::StrCat("params: ", p.name, " twice"));
+    }
+    double lo = p.lo, hi = p.hi;
+    if (lo == 0.0 && hi == 0.0) {
+      const std::optional<std::pair<double, double>> r = CalibrationRange(p.name);
+      lo = r ? r->first : info->lo;
+      hi = r ? r->second : info->hi;
+    }
+    if (!(lo < hi) || !std::isfinite(lo) || !std::isfinite(hi) || lo < info->lo || hi > info->hi) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "params: %s's bounds must satisfy %g <= lo < hi <= %g", p.name, info->lo, info->hi));
+    }
+    const double v = spec.params.*(info->field);
+    if (v < lo || v > hi) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "params: %s starts at %g, outside its bounds [%g, %g]", p.name, v, lo, hi));
+    }
+    fitted.push_back({info, lo, hi});
+  }
+
+  return Prepared{*std::move(model0), std::move(heldout), std::move(fitted)};
+}
+
+}  // namespace
+
+absl::Status ValidateCalibration(const TableSpec& spec, const SolverOptions& solver,
+                                 std::span<const Recording> recordings,
+                                 const CalibrationOptions& options) {
+  return Prepare(spec, solver, recordings, options).status();
+}
+
+absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverOptions& solver,
+                                            std::span<const Recording> recordings,
+                                            const CalibrationOptions& options) {
+  absl::StatusOr<Prepared> prepared = Prepare(spec, solver, recordings, options);
+  if (!prepared.ok()) return prepared.status();
+  const TableModel* model0 = &prepared->model0;
+  const std::vector<bool>& heldout = prepared->heldout;
+  const std::vector<Fitted>& fitted = prepared->fitted;
+  const int shots = static_cast<int>(recordings.size());
+  Budget budget(options.max_simulations, &options.cancelled);
+  auto progress = [&](double f, std::string_view stage) {
+    if (options.progress) options.progress(std::clamp(f, 0.0, 1.0), stage);
+  };
+  CalibrationReport report;
+  report.shots.resize(static_cast<size_t>(shots));
+  StrikeMap map{options.strike_bounds, 0.999 * spec.params.miscue_limit};
+
+  // 1. Every shot's strike under the starting parameters: the "before" report and the joint
+  // fit's starting point. Known strikes are kept.
+  std::vector<CueStrike> strikes(static_cast<size_t>(shots));
+  for (int i = 0; i < shots; ++i) {
+    const Recording& rec = recordings[static_cast<size_t>(i)];
+    ShotReport& sr = report.shots[static_cast<size_t>(i)];
+    sr.name = rec.name;
+    sr.heldout = heldout[static_cast<size_t>(i)];
+    const double window = sr.heldout ? options.strike_window_s : 1e300;
+    if (rec.strike) {
+      strikes[static_cast<size_t>(i)] = *rec.strike;
+    } else {
+      absl::StatusOr<StrikeFit> fit =
+          FitStrikeOn(*model0, solver, rec, options.strike_bounds, window, &budget);
+      if (!fit.ok()) {
+        return absl::Status(fit.status().code(),
+                            absl::StrFormat("recordings[%d]: %s", i, fit.status().message()));
+      }
+      strikes[static_cast<size_t>(i)] = fit->strike;
+    }
+    sr.strike_before = strikes[static_cast<size_t>(i)];
+    absl::StatusOr<ShotError> e = ScoreShot(*model0, solver, rec, sr.strike_before);
+    if (!e.ok()) return e.status();
+    sr.before = *e;
+    progress(0.3 * (i + 1) / shots, "strikes before");
+  }
+
+  // 2. The fit over the training shots by variable projection: LM over the table's parameters
+  // alone, each evaluation refitting every unknown strike to them first (from where it was),
+  // so the score is a function of the parameters with the strikes at their best. A joint LM
+  // over both at once stalls (one shot's strike on a kink of its own score, a graze, rejects
+  // every step of all the others), and alternating the two crawls along their coupling (a
+  // livelier cushion and a slower strike trade against each other).
+  std::vector<int> train;
+  for (int i = 0; i < shots; ++i) {
+    if (!heldout[static_cast<size_t>(i)]) train.push_back(i);
+  }
+  const int kp = static_cast<int>(fitted.size());
+  std::vector<int> row0(static_cast<size_t>(shots), 0);  // first residual of a shot
+  std::vector<ShotPoints> pts(static_cast<size_t>(shots));
+  int rows = 0;
+  for (int i : train) {
+    pts[static_cast<size_t>(i)] = PointsOf(recordings[static_cast<size_t>(i)], 1e300);
+    row0[static_cast<size_t>(i)] = rows;
+    rows += 2 * pts[static_cast<size_t>(i)].n;
+  }
+  PhysicsParams fitted_params = spec.params;
+  auto model_at = [&](const VectorXd& u) -> absl::StatusOr<TableModel> {
+    TableSpec ts = spec;
+    for (int c = 0; c < kp; ++c) {
+      const Fitted& fp = fitted[static_cast<size_t>(c)];
+      ts.params.*(fp.info->field) = FromU(u[c], fp.lo, fp.hi);
+    }
+    return TableModel::Create(std::move(ts));
+  };
+  // Every training shot's residuals under the parameters u, the strikes as they are.
+  auto all_residuals = [&](const VectorXd& u, double* out) -> absl::Status {
+    absl::StatusOr<TableModel> m = model_at(u);
+    if (!m.ok()) return m.status();
+    for (int i : train) {
+      if (absl::Status st = Simulate(*m, solver, recordings[static_cast<size_t>(i)],
+                                     strikes[static_cast<size_t>(i)], pts[static_cast<size_t>(i)],
+                                     &budget, out + row0[static_cast<size_t>(i)]);
+          !st.ok()) {
+        return st;
+      }
+    }
+    return absl::OkStatus();
+  };
+  if (!train.empty() && kp > 0 && rows >= kp) {
+    VectorXd x(kp);
+    for (int c = 0; c < kp; ++c) {
+      const Fitted& fp = fitted[static_cast<size_t>(c)];
+      x[c] = ToU(spec.params.*(fp.info->field), fp.lo, fp.hi);
+    }
+    // The strikes refitted to the parameters u (from where they were), then every shot's
+    // residuals: the reduced problem's residual function.
+    // Each refit starts from the strikes of the last accepted point (`anchor`), never from a
+    // rejected trial's, so that the score at a point does not depend on the trials before it.
+    std::vector<CueStrike> anchor = strikes;
+    auto refit = [&](const VectorXd& u, double* out) -> absl::Status {
+      absl::StatusOr<TableModel> m = model_at(u);
+      if (!m.ok()) return m.status();
+      for (int i : train) {
+        const Recording& rec = recordings[static_cast<size_t>(i)];
+        if (rec.strike) continue;
+        VectorXd su(map.size());
+        map.FromStrike(anchor[static_cast<size_t>(i)], su.data());
+        if (absl::Status st = RefineStrike(*m, solver, rec, map, 1e300, nullptr, kRefitIterations,
+                                           &budget, &su);
+            !st.ok()) {
+          return st;
+        }
+        strikes[static_cast<size_t>(i)] = map.ToStrike(su.data());
+      }
+      return all_residuals(u, out);
+    };
+    LmFunctor f(kp, rows);
+    f.residuals = [&](const VectorXd& u, VectorXd* r) { return refit(u, r->data()); };
+    // The reduced Jacobian: each shot's block of d(residuals)/d(parameters) with the part its
+    // own strike can take up projected out (Kaufman's variable projection), the strikes being
+    // at their optimum for u (df follows an evaluation at u).
+    f.jacobian = [&](const VectorXd& u, const VectorXd& r0, Eigen::MatrixXd* j) -> absl::Status {
+      anchor = strikes;  // u is accepted; its strikes are the last evaluation's
+      VectorXd up = u, r(rows);
+      for (int c = 0; c < kp; ++c) {
+        up[c] = u[c] + kParamDiffStep;
+        if (absl::Status st = all_residuals(up, r.data()); !st.ok()) return st;
+        j->col(c) = (r - r0) / kParamDiffStep;
+        up[c] = u[c];
+      }
+      absl::StatusOr<TableModel> m = model_at(u);
+      if (!m.ok()) return m.status();
+      const int ks = map.size();
+      for (int i : train) {
+        const Recording& rec = recordings[static_cast<size_t>(i)];
+        if (rec.strike) continue;
+        const int r_0 = row0[static_cast<size_t>(i)], n = 2 * pts[static_cast<size_t>(i)].n;
+        Eigen::MatrixXd js(n, ks);
+        VectorXd su(ks), rs(n);
+        map.FromStrike(strikes[static_cast<size_t>(i)], su.data());
+        for (int c = 0; c < ks; ++c) {
+          VectorXd sp = su;
+          sp[c] += kDiffStep;
+          if (absl::Status st = Simulate(*m, solver, rec, map.ToStrike(sp.data()), pts[static_cast<size_t>(i)],
+                                         &budget, rs.data());
+              !st.ok()) {
+            return st;
+          }
+          js.col(c) = (rs - r0.segment(r_0, n)) / kDiffStep;
+        }
+        // An orthonormal basis of the strike's columns (rank-revealing: flat directions drop).
+        Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(js);
+        const int rank = static_cast<int>(qr.rank());
+        if (rank == 0) continue;
+        const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(n, rank);
+        auto block = j->block(r_0, 0, n, kp);
+        block -= q * (q.transpose() * block);
+      }
+      return absl::OkStatus();
+    };
+    // Passes: LM on the parameters; then every strike fitted afresh (FitStrike's starts and
+    // windows) under the parameters reached, kept where it beats the one carried along (a
+    // strike fitted under the starting parameters can sit in another basin, a ball hit on the
+    // other side, and pull the parameters its way); again while a strike changed.
+    VectorXd r(rows);
+    for (int pass = 0; pass < kPasses && report.iterations < options.max_iterations; ++pass) {
+      absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - report.iterations);
+      if (!it.ok()) return it.status();
+      report.iterations += std::max(*it, 1);
+      // The strikes as fitted to the parameters reached (the last evaluation may have been a
+      // rejected trial's).
+      anchor = strikes;
+      if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
+      anchor = strikes;
+      absl::StatusOr<TableModel> m = model_at(x);
+      if (!m.ok()) return m.status();
+      bool changed = false;
+      for (int i : train) {
+        const Recording& rec = recordings[static_cast<size_t>(i)];
+        if (rec.strike) continue;
+        const ShotPoints& sp = pts[static_cast<size_t>(i)];
+        const double now = r.segment(row0[static_cast<size_t>(i)], 2 * sp.n).squaredNorm();
+        absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300, &budget);
+        if (!fresh.ok()) return fresh.status();
+        if (fresh->error.rms_m * fresh->error.rms_m < (1.0 - 1e-3) * now) {
+          strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = fresh->strike;
+          changed = true;
+        }
+      }
+      progress(0.3 + 0.6 * (pass + 1) / kPasses, "fit");
+      if (!changed) break;
+      if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
+      f.last_x.resize(0);  // the strikes moved: no cached evaluation holds
+    }
+    for (int c = 0; c < kp; ++c) {
+      const Fitted& fp = fitted[static_cast<size_t>(c)];
+      fitted_params.*(fp.info->field) = FromU(x[c], fp.lo, fp.hi);
+    }
+  }
+  TableSpec fitted_spec = spec;
+  fitted_spec.params = fitted_params;
+  absl::StatusOr<TableModel> model1 = TableModel::Create(fitted_spec);
+  if (!model1.ok()) return model1.status();
+
+  // 3. The "after" report: training shots with their jointly fitted strikes, held-out ones with
+  // strikes fitted afresh under the fitted parameters.
+  std::vector<double> train_before, train_after, held_before, held_after;
+  for (int i = 0; i < shots; ++i) {
+    const Recording& rec = recordings[static_cast<size_t>(i)];
+    ShotReport& sr = report.shots[static_cast<size_t>(i)];
+    if (sr.heldout && !rec.strike) {
+      absl::StatusOr<StrikeFit> fit =
+          FitStrikeOn(*model1, solver, rec, options.strike_bounds, options.strike_window_s, &budget);
+      if (!fit.ok()) return fit.status();
+      strikes[static_cast<size_t>(i)] = fit->strike;
+    }
+    sr.strike_after = strikes[static_cast<size_t>(i)];
+    sr.strike_after.phi_rad = std::remainder(sr.strike_after.phi_rad, 2.0 * std::numbers::pi);
+    absl::StatusOr<ShotError> e = ScoreShot(*model1, solver, rec, sr.strike_after);
+    if (!e.ok()) return e.status();
+    sr.after = *e;
+    (sr.heldout ? held_before : train_before).push_back(sr.before.mean_m);
+    (sr.heldout ? held_after : train_after).push_back(sr.after.mean_m);
+    progress(0.9 + 0.1 * (i + 1) / shots, "report");
+  }
+  report.params = fitted_params;
+  for (const Fitted& f : fitted) {
+    report.fitted.push_back({std::string(f.info->name), spec.params.*(f.info->field),
+                             fitted_params.*(f.info->field), f.lo, f.hi});
+  }
+  report.train_before_m = Median(train_before);
+  report.train_after_m = Median(train_after);
+  report.heldout_before_m = Median(held_before);
+  report.heldout_after_m = Median(held_after);
+  report.simulations = budget.used();
+  return report;
+}
+
+absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,
+                                             const TableState& initial, int cue,
+                                             const CueStrike& strike,
+                                             const SyntheticOptions& options) {
+  if (!(options.rate_hz >= 1.0 && options.rate_hz <= 10000.0)) {
+    return absl::InvalidArgumentError("rate_hz must be in [1, 10000]");
+  }
+  if (!(options.noise_m >= 0.0 && options.noise_m <= 1.0)) {
+    return absl::InvalidArgumentError("noise_m must be in [0, 1] m");
+  }
+  if (!(options.max_s > 0.0 && options.max_s <= 3600.0)) {
+    return absl::InvalidArgumentError("max_s must be in (0, 3600] s");
+  }
+  Recording rec;
+  rec.initial = initial;
+  rec.initial.t_s = 0.0;
+  rec.cue = cue;
+  if (options.keep_strike) rec.strike = strike;
+  TableState state = rec.initial;
+  absl::StatusOr<StrikeOutcome> struck = ApplyStrike(model, solver.effects, strike, cue, &state);
+  if (!struck.ok()) return struck.status();
+  std::vector<Event> events;
+  absl::StatusOr<std::unique_ptr<TableSimulation>> sim =
+      TableSimulation::Create(model, solver, std::move(state), &events);
+  if (!sim.ok()) return sim.status();
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (int64_t k = 1;; ++k) {
+    const double t = static_cast<double>(k) / options.rate_hz;
+    if (t > options.max_s) break;
+    events.clear();
+    if (absl::Status s = (*sim)->AdvanceTo(t, &events); !s.ok()) return s;
+    const TableState& now = (*sim)->state();
+    for (size_t b = 0; b < now.balls.size(); ++b) {
+      if (now.balls[b].pocket >= 0) continue;
+      TrackPoint p{.t_s = t, .ball = static_cast<int>(b), .xy = now.balls[b].r.head<2>()};
+      if (options.noise_m > 0.0) {
+        p.xy.x() += options.noise_m * noise(rng);
+        p.xy.y() += options.noise_m * noise(rng);
+      }
+      rec.track.push_back(p);
+    }
+    if ((*sim)->AtRest()) break;
+  }
+  return rec;
+}
+
+}  // namespace sportsim::billiards

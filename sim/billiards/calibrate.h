@@ -1,0 +1,182 @@
+// Calibration from recorded shots: the balls' tracked positions over time, scored against the
+// engine's, and a fit of each shot's cue inputs and the table's parameters to them.
+//
+// A recording is a table at rest (the balls where they stood before the strike), the struck
+// ball, and tracked positions (t, ball, x, y) after the strike, as a camera tracker gives
+// them (50 Hz is common). The cue inputs are usually unknown: a shot's strike (the cue ball's
+// speed, heading and tip offsets; the cue level) is fitted with it.
+//
+// The score of a shot (ShotError) is the mean distance between each tracked position and the
+// simulated ball's centre at the same time, over every tracked point of every ball; the fit
+// minimises the sum over shots of each shot's mean squared distance (each shot weighs the
+// same whatever its length or frame rate), by Levenberg-Marquardt (Eigen's) in an unbounded
+// coordinate per parameter (a logistic map onto its bounds), with forward differences for the
+// Jacobian. A shot's strike starts from the cue ball's first tracked motion and several tip
+// offsets, each refined, the best kept. The joint fit then moves the table's parameters and
+// every training shot's strike together. Held-out shots never inform the table's parameters:
+// their strikes are fitted before and after, with the table's parameters fixed, to report the
+// error a new shot would see.
+#ifndef SPORTSIM_SIM_BILLIARDS_CALIBRATE_H_
+#define SPORTSIM_SIM_BILLIARDS_CALIBRATE_H_
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "Eigen/Core"
+#include "absl/status/statusor.h"
+#include "sim/billiards/cue.h"
+#include "sim/billiards/engine.h"
+#include "sim/billiards/model.h"
+#include "sim/billiards/state.h"
+
+namespace sportsim::billiards {
+
+/// One tracked position: ball `ball` (its index in Recording::initial) centred at `xy` (m, the
+/// table frame) at `t_s` (s after the strike).
+struct TrackPoint {
+  double t_s = 0.0;
+  int ball = 0;
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+};
+
+/// A recorded shot.
+struct Recording {
+  std::string name;
+  TableState initial;              ///< every ball at rest before the strike, t_s = 0
+  int cue = 0;                     ///< the struck ball (index in initial.balls)
+  std::vector<TrackPoint> track;   ///< in time order (ties in any order)
+  /// The cue inputs when they are known (a robot, a sensor cue): then they are not fitted.
+  std::optional<CueStrike> strike;
+};
+
+/// Checks a recording against a model: balls on the table and at rest, a valid cue index,
+/// at least one tracked point, times finite, >= 0 and in order, ball indices valid, positions
+/// finite, a known strike valid. InvalidArgument naming the field.
+absl::Status ValidateRecording(const TableModel& model, const Recording& recording);
+
+/// How far the engine's shot is from the recording.
+struct ShotError {
+  double mean_m = 0.0;   ///< mean distance over the tracked points (the score)
+  double rms_m = 0.0;    ///< root mean square distance
+  double max_m = 0.0;    ///< largest distance
+  int points = 0;        ///< tracked points scored
+};
+
+/// Simulates `strike` on the recording's table under `model` and scores it against the
+/// tracked points with t_s <= until_s (all of them by default). Errors: the strike's or the
+/// engine's (InvalidArgument, ResourceExhausted).
+absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions& solver,
+                                    const Recording& recording, const CueStrike& strike,
+                                    double until_s = 1e300);
+
+/// What a shot's fitted strike may be: the cue ball's speed just after the strike (ball_speed),
+/// its heading, the tip offsets (each within +-0.7 of the miscue limit, so that both together
+/// stay inside it) and, when fit_elevation, the cue's elevation (else level).
+struct StrikeBounds {
+  double min_speed_mps = 0.05;
+  double max_speed_mps = kMaxStrikeSpeed;
+  bool fit_elevation = false;
+  double max_elevation_deg = 30.0;
+};
+
+/// Fits a shot's strike to its tracked points with t_s <= until_s (with the table fixed).
+struct StrikeFit {
+  CueStrike strike;       ///< ball_speed = true: speed_mps is the cue ball's speed
+  ShotError error;        ///< over the points fitted
+  int64_t simulations = 0;
+};
+absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions& solver,
+                                    const Recording& recording, const StrikeBounds& bounds = {},
+                                    double until_s = 1e300);
+
+/// A table parameter to fit (a ParamInfos() name) and its bounds; lo = hi = 0 takes the
+/// published range of CalibrationRange (or, for parameters without one, the parameter's
+/// allowed range).
+struct FitParam {
+  std::string name;
+  double lo = 0.0, hi = 0.0;
+};
+
+/// The published range a parameter is searched in by default (lo, hi), where there is one:
+/// the cloth, ball and cushion constants of Alciatore's typical-values FAQ and Mathavan et
+/// al. (2010). nullopt: none (the parameter's allowed range is used).
+std::optional<std::pair<double, double>> CalibrationRange(std::string_view name);
+
+struct CalibrationOptions {
+  std::vector<FitParam> params;    ///< the table's parameters to fit (may be empty: strikes only)
+  /// Indices of the recordings held out of the fit (scored only).
+  std::vector<int> heldout;
+  StrikeBounds strike_bounds;
+  /// Fit each shot's strike on its points with t_s <= this only (the table's parameters use
+  /// every point); the held-out report then also says how well the rest of the shot is
+  /// predicted. Default: every point.
+  double strike_window_s = 1e300;
+  int max_iterations = 60;          ///< Levenberg-Marquardt iterations of the joint fit
+  int64_t max_simulations = 2000000;  ///< budget over the whole calibration
+  std::function<bool()> cancelled;  ///< polled between simulations: Cancelled
+  /// Called as the calibration goes: the fraction done (0..1) and the stage's name.
+  std::function<void(double, std::string_view)> progress;
+};
+
+/// One recording's fit: its strike and error before (the model's parameters as given) and
+/// after (the fitted parameters), each scored on all its tracked points.
+struct ShotReport {
+  std::string name;
+  bool heldout = false;
+  CueStrike strike_before, strike_after;
+  ShotError before, after;
+};
+
+struct ParamReport {
+  std::string name;
+  double before = 0.0, after = 0.0, lo = 0.0, hi = 0.0;
+};
+
+struct CalibrationReport {
+  PhysicsParams params;              ///< the fitted parameters (the model's, the fitted ones moved)
+  std::vector<ParamReport> fitted;   ///< in CalibrationOptions::params order
+  std::vector<ShotReport> shots;     ///< in recording order
+  /// Median over the shots of each shot's mean distance (m).
+  double train_before_m = 0.0, train_after_m = 0.0;
+  double heldout_before_m = 0.0, heldout_after_m = 0.0;  ///< 0 when nothing is held out
+  int iterations = 0;                ///< joint fit iterations
+  int64_t simulations = 0;
+};
+
+/// Checks a calibration's inputs as Calibrate does before any work (the model, the solver,
+/// every recording, the parameters and their bounds, the held-out indices, the options).
+absl::Status ValidateCalibration(const TableSpec& spec, const SolverOptions& solver,
+                                 std::span<const Recording> recordings,
+                                 const CalibrationOptions& options);
+
+/// Calibrates `spec`'s parameters (the model's starting point) and every shot's strike to the
+/// recordings. InvalidArgument for a bad recording (its index named), parameter name, bound or
+/// option; ResourceExhausted past max_simulations; Cancelled when `cancelled` says so.
+absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverOptions& solver,
+                                            std::span<const Recording> recordings,
+                                            const CalibrationOptions& options);
+
+/// A synthetic recording: `strike` played on `initial` under `model`, every ball on the table
+/// tracked at `rate_hz` from the strike until all rest (at most max_s), each coordinate with
+/// Gaussian noise of sigma noise_m (seeded; 0: exact). The strike is kept in the recording
+/// only when keep_strike.
+struct SyntheticOptions {
+  double rate_hz = 50.0;
+  double noise_m = 0.0;
+  uint64_t seed = 1;
+  double max_s = 60.0;
+  bool keep_strike = false;
+};
+absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,
+                                             const TableState& initial, int cue,
+                                             const CueStrike& strike,
+                                             const SyntheticOptions& options = {});
+
+}  // namespace sportsim::billiards
+
+#endif  // SPORTSIM_SIM_BILLIARDS_CALIBRATE_H_

@@ -1,0 +1,283 @@
+// Calibration from recorded shots (calibrate.h): scores, strike fits and the joint fit of a
+// table's parameters, on synthetic recordings (the engine's own shots on a table with known
+// parameters, tracked at 50 Hz with Gaussian noise like a camera tracker's).
+#include "sim/billiards/calibrate.h"
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "sim/billiards/cue.h"
+#include "sim/billiards/model.h"
+
+namespace sportsim::billiards {
+namespace {
+
+using ::testing::HasSubstr;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+TableSpec Carom() { return *MakeTablePreset("carom"); }
+
+// The carom table with other cloth and cushion constants: the "real" table the recordings
+// come from.
+TableSpec TrueTable() {
+  TableSpec s = Carom();
+  s.params.mu_slide = 0.26;
+  s.params.mu_roll = 0.0055;
+  s.params.spin_decel_rps2 = 7.5;
+  s.params.e_cushion = 0.9;
+  s.params.f_cushion = 0.15;
+  return s;
+}
+
+// Three balls at random spots at least a few diameters apart.
+TableState RandomLayout(const TableModel& m, std::mt19937_64& rng) {
+  const double l = m.spec().length_m, w = m.spec().width_m, d = 2 * m.radius();
+  std::uniform_real_distribution<double> ux(-0.4 * l, 0.4 * l), uy(-0.4 * w, 0.4 * w);
+  TableState s;
+  const char* ids[] = {"cue", "yellow", "red"};
+  while (s.balls.size() < 3) {
+    const Eigen::Vector3d r(ux(rng), uy(rng), m.radius());
+    bool clear = true;
+    for (const Ball& b : s.balls) clear = clear && (b.r - r).norm() > 4 * d;
+    if (!clear) continue;
+    Ball b;
+    b.id = ids[s.balls.size()];
+    b.r = r;
+    s.balls.push_back(b);
+  }
+  return s;
+}
+
+// A strike aimed at the first object ball give or take 10 degrees (so that balls collide),
+// at 1.5 to 4 m/s, with the tip anywhere within 0.3 R of the centre.
+CueStrike RandomStrike(const TableState& s, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Eigen::Vector3d to = s.balls[1].r - s.balls[0].r;
+  CueStrike c;
+  c.ball_speed = true;
+  c.speed_mps = 1.5 + 2.5 * u(rng);
+  c.phi_rad = std::atan2(to.y(), to.x()) + (u(rng) - 0.5) * 20 * kDeg;
+  c.a = 0.6 * (u(rng) - 0.5);
+  c.b = 0.6 * (u(rng) - 0.5);
+  return c;
+}
+
+std::vector<Recording> Recordings(const TableModel& truth, int n, double noise_m, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Recording> out;
+  for (int i = 0; i < n; ++i) {
+    const TableState layout = RandomLayout(truth, rng);
+    const CueStrike strike = RandomStrike(layout, rng);
+    absl::StatusOr<Recording> r = SyntheticRecording(
+        truth, SolverOptions{}, layout, 0, strike,
+        SyntheticOptions{.rate_hz = 50, .noise_m = noise_m, .seed = seed * 1000 + static_cast<uint64_t>(i)});
+    EXPECT_TRUE(r.ok()) << r.status();
+    r->name = "shot" + std::to_string(i);
+    out.push_back(*std::move(r));
+  }
+  return out;
+}
+
+// A recording played back with its own strike on its own table scores zero; another strike
+// or another table does not.
+TEST(CalibrateTest, ARecordingScoresZeroAgainstItsOwnShot) {
+  const TableModel truth = *TableModel::Create(TrueTable());
+  std::mt19937_64 rng(7);
+  const TableState layout = RandomLayout(truth, rng);
+  const CueStrike strike = RandomStrike(layout, rng);
+  absl::StatusOr<Recording> rec = SyntheticRecording(truth, SolverOptions{}, layout, 0, strike);
+  ASSERT_TRUE(rec.ok()) << rec.status();
+  EXPECT_GT(rec->track.size(), 3 * 50u);  // a second and more of three balls
+  absl::StatusOr<ShotError> same = ScoreShot(truth, SolverOptions{}, *rec, strike);
+  ASSERT_TRUE(same.ok()) << same.status();
+  EXPECT_EQ(same->mean_m, 0.0);
+  EXPECT_EQ(same->points, static_cast<int>(rec->track.size()));
+  CueStrike other = strike;
+  other.phi_rad += 1 * kDeg;
+  EXPECT_GT(ScoreShot(truth, SolverOptions{}, *rec, other)->mean_m, 0.005);
+  const TableModel carom = *TableModel::Create(Carom());
+  EXPECT_GT(ScoreShot(carom, SolverOptions{}, *rec, strike)->mean_m, 0.005);
+  // Only the first half second.
+  absl::StatusOr<ShotError> early = ScoreShot(carom, SolverOptions{}, *rec, strike, 0.5);
+  ASSERT_TRUE(early.ok());
+  EXPECT_EQ(early->points, 3 * 25);
+}
+
+// The strike of a shot tracked at 50 Hz with 1 mm of noise comes back from its track alone:
+// the fitted shot lies as far from the track as the noise does (a 2-D Gaussian's mean
+// distance is sigma sqrt(pi / 2) = 1.25 mm) and the cue inputs are close to the true ones.
+TEST(CalibrateTest, FitStrikeRecoversTheCueInputs) {
+  const TableModel truth = *TableModel::Create(TrueTable());
+  const std::vector<Recording> recs = Recordings(truth, 6, 1e-3, 11);
+  std::mt19937_64 rng(11);
+  for (size_t i = 0; i < recs.size(); ++i) {
+    // The same strikes as Recordings drew.
+    const TableState layout = RandomLayout(truth, rng);
+    const CueStrike want = RandomStrike(layout, rng);
+    absl::StatusOr<StrikeFit> fit = FitStrike(truth, SolverOptions{}, recs[i]);
+    ASSERT_TRUE(fit.ok()) << fit.status();
+    EXPECT_LT(fit->error.mean_m, 1.5e-3) << i;
+    EXPECT_NEAR(fit->strike.speed_mps, want.speed_mps, 0.01 * want.speed_mps) << i;
+    EXPECT_NEAR(std::remainder(fit->strike.phi_rad - want.phi_rad, 2 * std::numbers::pi), 0.0, 0.1 * kDeg) << i;
+    EXPECT_NEAR(fit->strike.a, want.a, 0.02) << i;
+    EXPECT_NEAR(fit->strike.b, want.b, 0.02) << i;
+  }
+}
+
+// The joint fit recovers the table's cloth and cushion constants from eight training shots
+// (starting from the carom preset's), and the held-out shots' error falls to the noise.
+TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
+  const TableSpec want = TrueTable();
+  const TableModel truth = *TableModel::Create(want);
+  const std::vector<Recording> recs = Recordings(truth, 12, 1e-3, 23);
+  CalibrationOptions o;
+  for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2", "e_cushion", "f_cushion"}) {
+    o.params.push_back({.name = p});
+  }
+  o.heldout = {8, 9, 10, 11};
+  std::vector<double> fractions;
+  o.progress = [&](double f, std::string_view) { fractions.push_back(f); };
+  absl::StatusOr<CalibrationReport> r = Calibrate(Carom(), SolverOptions{}, recs, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  EXPECT_NEAR(r->params.mu_slide, want.params.mu_slide, 0.05 * want.params.mu_slide);
+  EXPECT_NEAR(r->params.mu_roll, want.params.mu_roll, 0.05 * want.params.mu_roll);
+  EXPECT_NEAR(r->params.spin_decel_rps2, want.params.spin_decel_rps2, 0.1 * want.params.spin_decel_rps2);
+  EXPECT_NEAR(r->params.e_cushion, want.params.e_cushion, 0.02);
+  EXPECT_NEAR(r->params.f_cushion, want.params.f_cushion, 0.02);
+  EXPECT_LT(r->heldout_after_m, 2e-3);
+  EXPECT_GT(r->heldout_before_m, 5 * r->heldout_after_m);
+  EXPECT_LT(r->train_after_m, 2e-3);
+  ASSERT_FALSE(fractions.empty());
+  EXPECT_EQ(fractions.back(), 1.0);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+}
+
+// Two shots, one parameter: cheap enough to run twice.
+CalibrationOptions SmallOptions() {
+  CalibrationOptions o;
+  o.params = {{.name = "mu_roll"}};
+  o.heldout = {2};
+  o.strike_window_s = 0.5;  // the held-out shot's strike from its first half second only
+  return o;
+}
+
+// The same calibration twice gives bit-identical parameters and strikes; the held-out shot is
+// scored on all its points though its strike saw half a second of them; a recording whose
+// strike is known keeps it.
+TEST(CalibrateTest, CalibrationIsDeterministicAndKeepsKnownStrikes) {
+  const TableModel truth = *TableModel::Create(TrueTable());
+  std::vector<Recording> recs = Recordings(truth, 3, 1e-3, 5);
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 2; ++i) {  // the strikes Recordings drew; the second one is known
+    const TableState layout = RandomLayout(truth, rng);
+    const CueStrike strike = RandomStrike(layout, rng);
+    if (i == 1) recs[1].strike = strike;
+  }
+  const CalibrationOptions o = SmallOptions();
+  absl::StatusOr<CalibrationReport> a = Calibrate(Carom(), SolverOptions{}, recs, o);
+  absl::StatusOr<CalibrationReport> b = Calibrate(Carom(), SolverOptions{}, recs, o);
+  ASSERT_TRUE(a.ok()) << a.status();
+  ASSERT_TRUE(b.ok()) << b.status();
+  EXPECT_EQ(a->params.mu_roll, b->params.mu_roll);
+  EXPECT_NE(a->params.mu_roll, Carom().params.mu_roll);
+  EXPECT_EQ(a->params.mu_slide, Carom().params.mu_slide);  // not fitted: unchanged
+  EXPECT_EQ(a->simulations, b->simulations);
+  ASSERT_EQ(a->shots.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(a->shots[i].strike_after.speed_mps, b->shots[i].strike_after.speed_mps);
+    EXPECT_EQ(a->shots[i].after.mean_m, b->shots[i].after.mean_m);
+  }
+  EXPECT_EQ(a->shots[1].strike_after.speed_mps, recs[1].strike->speed_mps);
+  EXPECT_EQ(a->shots[1].strike_after.a, recs[1].strike->a);
+  EXPECT_TRUE(a->shots[2].heldout);
+  EXPECT_EQ(a->shots[2].after.points, static_cast<int>(recs[2].track.size()));
+  ASSERT_EQ(a->fitted.size(), 1u);
+  EXPECT_EQ(a->fitted[0].name, "mu_roll");
+  EXPECT_EQ(a->fitted[0].lo, 0.002);  // the published range's default
+  EXPECT_EQ(a->fitted[0].after, a->params.mu_roll);
+}
+
+// Bad recordings and options are refused with the field named, before any work.
+TEST(CalibrateTest, RefusesBadInputNamingTheField) {
+  const TableModel truth = *TableModel::Create(TrueTable());
+  const std::vector<Recording> good = Recordings(truth, 2, 0.0, 9);
+  auto refused = [&](std::vector<Recording> recs, CalibrationOptions o) {
+    absl::StatusOr<CalibrationReport> r = Calibrate(Carom(), SolverOptions{}, recs, o);
+    EXPECT_EQ(r.status().code(), absl::StatusCode::kInvalidArgument) << r.status();
+    return std::string(r.status().message());
+  };
+  const CalibrationOptions o = SmallOptions();
+  CalibrationOptions none = o;
+  none.heldout.clear();
+  EXPECT_THAT(refused({}, none), HasSubstr("recordings"));
+  {
+    CalibrationOptions bad = none;
+    bad.params = {{.name = "mu_rol"}};
+    EXPECT_THAT(refused(good, bad), HasSubstr("unknown parameter \"mu_rol\""));
+    bad.params = {{.name = "mu_roll", .lo = 0.02, .hi = 0.01}};
+    EXPECT_THAT(refused(good, bad), HasSubstr("mu_roll's bounds"));
+    bad.params = {{.name = "mu_roll", .lo = 0.001, .hi = 0.005}};  // the start, 0.01, is outside
+    EXPECT_THAT(refused(good, bad), HasSubstr("outside its bounds"));
+    bad.params = {{.name = "mu_roll"}, {.name = "mu_roll"}};
+    EXPECT_THAT(refused(good, bad), HasSubstr("twice"));
+    bad = none;
+    bad.heldout = {2};
+    EXPECT_THAT(refused(good, bad), HasSubstr("heldout: 2"));
+    bad = none;
+    bad.strike_bounds.min_speed_mps = 0;
+    EXPECT_THAT(refused(good, bad), HasSubstr("strike_bounds"));
+  }
+  {
+    std::vector<Recording> recs = good;
+    std::swap(recs[1].track[3], recs[1].track[40]);
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[1].track[4].t_s: points must be in time order"));
+    recs = good;
+    recs[0].track[5].ball = 3;
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[0].track[5].ball"));
+    recs = good;
+    recs[0].track[5].xy.x() = std::nan("");
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[0].track[5].xy"));
+    recs = good;
+    recs[0].cue = 7;
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[0].cue"));
+    recs = good;
+    recs[0].initial.balls[1].v.x() = 1.0;
+    EXPECT_THAT(refused(recs, none), HasSubstr("at rest"));
+    recs = good;
+    recs[0].track.clear();
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[0].track: no tracked points"));
+    recs = good;
+    for (TrackPoint& p : recs[0].track) {
+      if (p.ball == recs[0].cue) p.xy = recs[0].initial.balls[0].r.head<2>();
+    }
+    EXPECT_THAT(refused(recs, none), HasSubstr("never leaves its spot"));
+  }
+}
+
+// A calibration stops with ResourceExhausted at its simulation budget and with Cancelled when
+// asked, and reports its progress in order up to 1.
+TEST(CalibrateTest, StopsAtItsBudgetAndWhenCancelled) {
+  const TableModel truth = *TableModel::Create(TrueTable());
+  const std::vector<Recording> recs = Recordings(truth, 3, 1e-3, 5);
+  CalibrationOptions o = SmallOptions();
+  o.max_simulations = 500;
+  absl::StatusOr<CalibrationReport> r = Calibrate(Carom(), SolverOptions{}, recs, o);
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kResourceExhausted) << r.status();
+  EXPECT_THAT(std::string(r.status().message()), HasSubstr("max_simulations"));
+  o = SmallOptions();
+  int polls = 0;
+  o.cancelled = [&] { return ++polls > 100; };
+  r = Calibrate(Carom(), SolverOptions{}, recs, o);
+  EXPECT_EQ(r.status().code(), absl::StatusCode::kCancelled) << r.status();
+  EXPECT_EQ(polls, 101);
+}
+
+}  // namespace
+}  // namespace sportsim::billiards
