@@ -251,6 +251,21 @@ std::vector<CommandSpec> MakeSpecs() {
         {"seat", "with the admin token: the seat that concedes"},
         {"frame", "the frame conceded (default: the table's frame, read first)"}}},
       {"table", "record", "ID", "a ruled game's match record", NoFlags()},
+      {"table", "calibrate", "FILE...",
+       "fit a table's parameters and each shot's cue inputs to recorded shots (CSV track "
+       "files: t, ball, x, y; `shot simulate --format csv` writes one); progress on stderr",
+       Join({{{"table", "table preset to start from (default pool-9ft)"},
+              {"param", "a starting parameter (repeatable)"},
+              {"cushion_model", "han (default), mathavan2010 or mirror"}},
+             SolverFlags(),
+             {{"fit", "parameters to fit, NAME or NAME=LO:HI, comma separated (default bounds: "
+                      "the published ranges; none: the strikes only)"},
+              {"heldout", "files (0-based) scored but not fitted on, comma separated"},
+              {"window", "held-out shots' strikes from their first seconds only, (0, 3600] s"},
+              {"max_iterations", "Levenberg-Marquardt iterations, [1, 1000] (default 60)"},
+              {"max_simulations", "simulations in all, [1, 1e9] (default 2000000)"},
+              {"cue_ball", "the struck ball in every file (default: the first to move a cm)"},
+              {"fit_elevation", "fit the cue's elevation too (default level)"}}})},
       {"table", "watch", "ID", "the table's snapshots as they come",
        {{"rate", "snapshots per second at most while balls move, [0, 1000] (default 30); 0, "
                  "or above the tick rate: every tick"},

@@ -12,6 +12,7 @@
 
 #include "absl/flags/declare.h"
 #include "absl/flags/flag.h"
+#include "absl/strings/match.h"
 #include "absl/strings/numbers.h"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
@@ -21,6 +22,7 @@
 #include "client/cli.h"
 #include "client/game_text.h"
 #include "client/table_svg.h"
+#include "sim/billiards/track_file.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
 ABSL_DECLARE_FLAG(std::string, svg);
@@ -64,6 +66,19 @@ ABSL_FLAG(bool, safety, false, "table shoot: declare a safety");
 ABSL_FLAG(bool, push_out, false, "table shoot: declare a push-out (9-ball, 10-ball)");
 ABSL_FLAG(std::string, nominate, "", "table shoot: the nominated ball (snooker)");
 ABSL_FLAG(std::string, choice, "", "table decide: one of the pending decision's choices");
+ABSL_FLAG(std::vector<std::string>, fit, {},
+          "table calibrate: the parameters to fit, NAME or NAME=LO:HI, comma separated");
+ABSL_FLAG(std::vector<std::string>, heldout, {},
+          "table calibrate: the files held out of the fit (0-based indices), comma separated");
+ABSL_FLAG(std::optional<double>, window, std::nullopt,
+          "table calibrate: held-out shots' strikes from their first seconds only");
+ABSL_FLAG(std::optional<int>, max_iterations, std::nullopt,
+          "table calibrate: Levenberg-Marquardt iterations, [1, 1000] (default 60)");
+ABSL_FLAG(std::optional<int64_t>, max_simulations, std::nullopt,
+          "table calibrate: simulations in all, [1, 1e9] (default 2000000)");
+ABSL_FLAG(std::string, cue_ball, "",
+          "table calibrate: the struck ball in every file (default: the first ball to move)");
+ABSL_FLAG(bool, fit_elevation, false, "table calibrate: fit the cue's elevation too");
 
 namespace sportsim::cli {
 namespace {
@@ -673,9 +688,136 @@ std::optional<std::string> CheckGameFlags(std::string_view command, std::string_
   return std::nullopt;
 }
 
+namespace {
+
+// table calibrate FILE...: the files' recorded shots, the fit's progress on stderr, the report.
+int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
+  if (args.empty()) return UsageError("table calibrate needs one or more track files (CSV)");
+  if (Given("rack") || !RepeatedFlagValues("ball").empty()) {
+    return UsageError("table calibrate: --rack and --ball do not apply (each file places its balls)");
+  }
+  v1::CalibrateTableRequest request;
+  if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
+  request.mutable_table()->clear_rack();
+  request.mutable_table()->clear_balls();
+  if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
+  for (const std::string& f : absl::GetFlag(FLAGS_fit)) {
+    v1::FitParameter* p = request.add_fit();
+    const size_t eq = f.find('=');
+    p->set_name(f.substr(0, eq));
+    if (eq == std::string::npos) continue;
+    const std::vector<std::string> range = absl::StrSplit(f.substr(eq + 1), ':');
+    double lo = 0, hi = 0;
+    if (range.size() != 2 || !absl::SimpleAtod(range[0], &lo) || !absl::SimpleAtod(range[1], &hi)) {
+      return UsageError("--fit: NAME or NAME=LO:HI, got '" + f + "'");
+    }
+    p->set_lo(lo);
+    p->set_hi(hi);
+  }
+  for (const std::string& h : absl::GetFlag(FLAGS_heldout)) {
+    uint32_t i = 0;
+    if (!absl::SimpleAtoi(h, &i)) return UsageError("--heldout: file indices, got '" + h + "'");
+    request.add_heldout(i);
+  }
+  if (const auto w = absl::GetFlag(FLAGS_window)) request.set_strike_window_s(*w);
+  if (const auto n = absl::GetFlag(FLAGS_max_iterations)) request.set_max_iterations(*n);
+  if (const auto n = absl::GetFlag(FLAGS_max_simulations)) request.set_max_simulations(*n);
+  request.set_fit_elevation(absl::GetFlag(FLAGS_fit_elevation));
+  const std::string cue = absl::GetFlag(FLAGS_cue_ball);
+  for (const std::string& path : args) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return UsageError("table calibrate: cannot read '" + path + "'");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    absl::StatusOr<billiards::TrackFile> file = billiards::ParseTrackCsv(text);
+    if (!file.ok()) return UsageError(InvalidValue(path + ": " + std::string(file.status().message())));
+    v1::RecordedShot* shot = request.add_shots();
+    shot->set_name(path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1).substr(0, 64));
+    for (size_t b = 0; b < file->balls.size(); ++b) {
+      v1::BallPlacement* p = shot->add_balls();
+      p->set_id(file->balls[b]);
+      p->set_x_m(file->spots[b].x());
+      p->set_y_m(file->spots[b].y());
+    }
+    if (!cue.empty()) {
+      shot->set_cue_ball(cue);
+    } else if (file->cue >= 0) {
+      shot->set_cue_ball(file->balls[static_cast<size_t>(file->cue)]);
+    } else {
+      return UsageError(InvalidValue(path + ": no ball leaves its spot by a centimetre; name the "
+                                            "struck ball with --cue-ball"));
+    }
+    for (const billiards::TrackPoint& t : file->points) {
+      v1::TrackedPoint* q = shot->add_points();
+      q->set_t_s(t.t_s);
+      q->set_ball(static_cast<uint32_t>(t.ball));
+      q->set_x_m(t.xy.x());
+      q->set_y_m(t.xy.y());
+    }
+  }
+  std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
+  std::unique_ptr<grpc::ClientReader<v1::CalibrateTableResponse>> reader =
+      stub.CalibrateTable(call.get(), request);
+  v1::CalibrateTableResponse r, last;
+  bool have_report = false;
+  int shown = -1;
+  while (reader->Read(&r)) {
+    if (r.has_report()) {  // the last message (the server keeps only the latest progress)
+      last = r;
+      have_report = true;
+      std::cerr << "calibrate: 100% (done)\n";
+      continue;
+    }
+    const int pct = static_cast<int>(r.fraction() * 100);
+    if (pct / 10 != shown / 10) {  // every tenth of the way
+      std::cerr << "calibrate: " << pct << "% (" << r.stage() << ")\n";
+      shown = pct;
+    }
+  }
+  const grpc::Status status = reader->Finish();
+  if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED &&
+      absl::StrContains(status.error_message(), "larger than max")) {
+    return ReportRpcError(grpc::Status(
+        status.error_code(),
+        absl::StrFormat("%s: the recorded shots make a %d-byte request; a server takes up to "
+                        "--max_request_bytes (default 64 KiB): raise it, or give fewer shots",
+                        status.error_message(), request.ByteSizeLong())));
+  }
+  if (!status.ok()) return ReportRpcError(status);
+  if (!have_report) return ReportRpcError(grpc::Status(grpc::StatusCode::INTERNAL, "no report"));
+  const v1::CalibrationReport& rep = last.report();
+  return Print(ctx, rep, [&] {
+    std::cout << absl::StrFormat("%-22s %12s %12s   bounds\n", "parameter", "before", "after");
+    for (const v1::FittedParameter& p : rep.fitted()) {
+      std::cout << absl::StrFormat("%-22s %12.6g %12.6g   [%g, %g]\n", p.name(), p.before(), p.after(),
+                                   p.lo(), p.hi());
+    }
+    std::cout << absl::StrFormat("%-22s %9s %9s  %s\n", "shot", "before", "after", "(mean distance, mm)");
+    for (const v1::ShotCalibration& c : rep.shots()) {
+      std::cout << absl::StrFormat("%-22s %9.1f %9.1f  %s\n", c.name(), 1e3 * c.before().mean_m(),
+                                   1e3 * c.after().mean_m(), c.heldout() ? "held out" : "");
+    }
+    std::cout << absl::StrFormat("median: training %.1f -> %.1f mm", 1e3 * rep.train_before_m(),
+                                 1e3 * rep.train_after_m());
+    if (rep.heldout_before_m() > 0 || rep.heldout_after_m() > 0) {
+      std::cout << absl::StrFormat(", held out %.1f -> %.1f mm", 1e3 * rep.heldout_before_m(),
+                                   1e3 * rep.heldout_after_m());
+    }
+    std::cout << absl::StrFormat("; %d iterations, %d simulations, %.2f s CPU\n", rep.iterations(),
+                                 rep.simulations(), rep.cpu_s());
+    std::string flags;
+    for (const v1::FittedParameter& p : rep.fitted()) {
+      flags += absl::StrFormat(" --param %s=%.6g", p.name(), p.after());
+    }
+    if (!flags.empty()) std::cout << "use:" << flags << "\n";
+  });
+}
+
+}  // namespace
+
 int RunTable(const Context& ctx, const std::vector<std::string>& args) {
   static constexpr const char* kVerbs =
-      "create, list, get, delete, reset, place, shoot, turn, watch, decide, concede, record";
+      "create, list, get, delete, reset, place, shoot, turn, watch, decide, concede, record, "
+      "calibrate";
   if (args.empty()) return UsageError(std::string("table needs a subcommand: ") + kVerbs);
   if (ctx.format == Format::kCsv && args[0] != "watch") {
     return UsageError("table " + args[0] + " has no csv form (json, jsonl or text)");
@@ -694,6 +836,7 @@ int RunTable(const Context& ctx, const std::vector<std::string>& args) {
   if (verb == "decide") return RunDecide(ctx, *stub, rest);
   if (verb == "concede") return RunConcede(ctx, *stub, rest);
   if (verb == "record") return RunRecord(ctx, *stub, rest);
+  if (verb == "calibrate") return RunCalibrate(ctx, *stub, rest);
   return UsageError("unknown table subcommand '" + verb + "' (" + kVerbs + ")");
 }
 

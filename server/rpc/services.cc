@@ -12,6 +12,7 @@
 #include "absl/strings/match.h"
 
 #include "server/billiards/batch.h"
+#include "server/billiards/calibration.h"
 #include "server/billiards/convert.h"
 #include "server/billiards/preview.h"
 #include "server/billiards/game_convert.h"
@@ -683,6 +684,127 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
   v1::SimulateShotsResponse out_;  // the message being written
 };
 
+// CalibrateTable: one calibration, one job on the pool's batch workers (below interactive
+// work), under the request's CPU budget (--max_request_cpu), cancellation and deadline. Its
+// progress is streamed as it goes; only the latest unsent progress is kept (a slow reader sees
+// fewer, and the server holds one message), and the last message carries the report. The
+// stream is finished once the job has ended and no write is in flight, so nothing touches the
+// reactor after it is done.
+class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTableResponse> {
+ public:
+  CalibrateReactor(WorkPool* pool, grpc::CallbackServerContext* ctx,
+                   const v1::CalibrateTableRequest& request) {
+    absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(request);
+    if (!job.ok()) {
+      Finish(ToGrpcStatus(job.status()));
+      return;
+    }
+    auto shared = std::make_shared<CalibrationJob>(*std::move(job));
+    {
+      absl::MutexLock lock(&mu_);
+      running_ = true;
+    }
+    absl::Status queued = pool->Submit(
+        [this, shared, pool](const WorkControl& control) { Run(shared.get(), control, pool); },
+        [this](const absl::Status& dropped) {
+          Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+            running_ = false;
+            if (error_.ok()) error_ = dropped;
+          });
+        },
+        [ctx] { return ctx->IsCancelled(); }, DeadlineOf(ctx), WorkClass::kBatch, pool->NewOwner());
+    if (!queued.ok()) {
+      Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+        running_ = false;
+        error_ = queued;
+      });
+    }
+  }
+
+  void OnWriteDone(bool ok) override {
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      writing_ = false;
+      if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
+    });
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  template <typename F>
+  void Step(F f) {
+    std::optional<grpc::Status> finish;
+    {
+      absl::MutexLock lock(&mu_);
+      f();
+      finish = Pump();
+    }
+    if (finish.has_value()) Finish(*finish);
+  }
+
+  // Writes the pending message when no write is in flight; says when to finish: the job has
+  // ended and nothing is left to write (or it failed).
+  std::optional<grpc::Status> Pump() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (finished_) return std::nullopt;
+    if (!error_.ok()) pending_.reset();
+    if (!writing_ && pending_.has_value()) {
+      out_ = *std::move(pending_);
+      pending_.reset();
+      writing_ = true;
+      StartWrite(&out_);
+      return std::nullopt;
+    }
+    if (!writing_ && !running_) {
+      finished_ = true;
+      return ToGrpcStatus(error_);
+    }
+    return std::nullopt;
+  }
+
+  // The calibration on a worker.
+  void Run(CalibrationJob* job, const WorkControl& control, WorkPool* pool) {
+    job->options.cancelled = [&control] { return control.ShouldStop(); };
+    job->options.progress = [this](double fraction, std::string_view stage) {
+      v1::CalibrateTableResponse r;
+      r.set_fraction(fraction);
+      r.set_stage(std::string(stage));
+      Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { pending_ = std::move(r); });
+    };
+    absl::StatusOr<billiards::CalibrationReport> report =
+        billiards::Calibrate(job->spec, job->solver, job->recordings, job->options);
+    absl::Status st = report.status();
+    if (st.code() == absl::StatusCode::kCancelled) {
+      if (absl::Status why = control.Check(); !why.ok()) st = why;
+    }
+    if (st.code() == absl::StatusCode::kResourceExhausted &&
+        absl::StrContains(st.message(), "--max_request_cpu")) {
+      pool->CountBudgetExhausted();
+    }
+    v1::CalibrateTableResponse last;
+    if (st.ok()) {
+      last.set_fraction(1.0);
+      last.set_stage("done");
+      CalibrationReportToProto(*job, *report, last.mutable_report());
+      last.mutable_report()->set_cpu_s(control.CpuSeconds());
+    }
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      running_ = false;
+      if (!st.ok()) {
+        if (error_.ok()) error_ = st;
+      } else {
+        pending_ = std::move(last);
+      }
+    });
+  }
+
+  absl::Mutex mu_;
+  bool running_ ABSL_GUARDED_BY(mu_) = false;
+  bool writing_ ABSL_GUARDED_BY(mu_) = false;
+  bool finished_ ABSL_GUARDED_BY(mu_) = false;
+  absl::Status error_ ABSL_GUARDED_BY(mu_);
+  std::optional<v1::CalibrateTableResponse> pending_ ABSL_GUARDED_BY(mu_);
+  v1::CalibrateTableResponse out_;  // the message being written
+};
+
 class BilliardsService final : public v1::Billiards::CallbackService {
  public:
   BilliardsService(TableRegistry* tables, WorkPool* pool, int64_t max_reply_bytes,
@@ -743,6 +865,10 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   grpc::ServerWriteReactor<v1::SimulateShotsResponse>* SimulateShots(
       grpc::CallbackServerContext* ctx, const v1::SimulateShotsRequest* request) override {
     return new BatchReactor(pool_, ctx, *request, cpu_budget_s_, streams_);
+  }
+  grpc::ServerWriteReactor<v1::CalibrateTableResponse>* CalibrateTable(
+      grpc::CallbackServerContext* ctx, const v1::CalibrateTableRequest* request) override {
+    return new CalibrateReactor(pool_, ctx, *request);
   }
   grpc::ServerUnaryReactor* PreviewShot(grpc::CallbackServerContext* ctx,
                                         const v1::PreviewShotRequest* request,

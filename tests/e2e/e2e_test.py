@@ -1523,5 +1523,79 @@ class ShotBatchAgainstServer(unittest.TestCase):
             self.assertIn(flag, r.stdout)
 
 
+class CalibrateAgainstServer(unittest.TestCase):
+    """`table calibrate`: track files written by `shot simulate --format csv` on a carom table
+    with another rolling resistance calibrate the preset back to it."""
+
+    @classmethod
+    def setUpClass(cls):
+        # Recorded shots are larger than the requests a server takes by default (64 KiB).
+        cls.server = ServerProcess(SERVER, "--max_request_bytes", str(8 << 20))
+        cls.small = ServerProcess(SERVER)
+        cls.dir = tempfile.TemporaryDirectory()
+        cls.files = []
+        for name, cue, speed, phi, b in (("a.csv", "-1.0,0.1", "2.5", "20", "0.2"),
+                                         ("b.csv", "0.9,-0.4", "3", "160", "-0.1")):
+            r = cli(cls.server.address, "--format", "csv", "shot", "simulate", "--table", "carom",
+                    "--rack", "empty", "--ball", "white@" + cue, "--ball", "yellow@0.4,0.2",
+                    "--ball", "red@-0.5,-0.3", "--strike-ball", "white", "--ball-speed", speed,
+                    "--phi", phi, "--b", b, "--param", "mu_roll=0.006", "--sample-rate", "50")
+            assert r.returncode == 0, r.stderr
+            path = os.path.join(cls.dir.name, name)
+            with open(path, "w") as f:
+                f.write(r.stdout)
+            cls.files.append(path)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.__exit__()
+        cls.small.__exit__()
+        cls.dir.cleanup()
+
+    def test_calibrate_json_contract(self):
+        r = cli(self.server.address, "--format", "json", "table", "calibrate", *self.files,
+                "--table", "carom", "--fit", "mu_roll")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        report = json.loads(r.stdout)
+        self.assertAlmostEqual(report["params"]["mu_roll"], 0.006, delta=0.006 * 0.01)
+        self.assertEqual([p["name"] for p in report["fitted"]], ["mu_roll"])
+        self.assertEqual(report["fitted"][0]["before"], 0.01)
+        self.assertEqual([s["name"] for s in report["shots"]], ["a.csv", "b.csv"])
+        for shot in report["shots"]:
+            self.assertGreater(shot["before"]["mean_m"], 0.01)
+            self.assertLess(shot["after"]["mean_m"], 1e-3)
+            self.assertEqual(shot["strike_after"]["ball"], "white")
+            self.assertIn("ball_speed_mps", shot["strike_after"])
+        for key in ("train_before_m", "train_after_m", "heldout_before_m", "heldout_after_m",
+                    "iterations", "simulations", "cpu_s"):
+            self.assertIn(key, report)
+        self.assertIn("calibrate: 100%", r.stderr)  # progress on stderr
+
+    def test_calibrate_text_names_the_flags_to_use(self):
+        r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
+                "--fit", "mu_roll=0.002:0.015", "--heldout", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("held out", r.stdout)
+        self.assertRegex(r.stdout, r"use: --param mu_roll=0\.00\d+")
+
+    def test_bad_files_and_limits(self):
+        bad = os.path.join(self.dir.name, "bad.csv")
+        with open(bad, "w") as f:
+            f.write("t,ball,x,y\n0,white,0,0\n0.02,white,zero,0\n")
+        r = cli(self.server.address, "table", "calibrate", bad, "--table", "carom")
+        self.assertEqual(r.returncode, 3, r.stderr)  # INVALID_ARGUMENT, before any call
+        self.assertIn("line 3: x must be a finite number", r.stderr)
+        r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
+                "--fit", "mu_rol")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("fit: unknown parameter", r.stderr)
+        r = cli(self.server.address, "table", "calibrate", *self.files, "--rack", "empty")
+        self.assertEqual(r.returncode, 64, r.stderr)  # a usage error
+        # A server with the default request limit: the CLI says what to raise.
+        r = cli(self.small.address, "table", "calibrate", *self.files, "--table", "carom")
+        self.assertEqual(r.returncode, 8, r.stderr)  # RESOURCE_EXHAUSTED
+        self.assertIn("--max_request_bytes", r.stderr)
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -1,0 +1,219 @@
+#include "server/billiards/calibration.h"
+
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "absl/strings/str_cat.h"
+#include "absl/strings/str_format.h"
+#include "server/billiards/convert.h"
+#include "server/world/world.h"
+#include "sim/core/units.h"
+
+namespace sportsim::server {
+namespace {
+
+namespace b = ::sportsim::billiards;
+
+void StrikeToProto(const b::CueStrike& s, v1::CueStrike* out) {
+  if (s.ball_speed) {
+    out->set_ball_speed_mps(s.speed_mps);
+  } else {
+    out->set_speed_mps(s.speed_mps);
+  }
+  out->set_phi_deg(RadToDeg(s.phi_rad));
+  out->set_theta_deg(RadToDeg(s.theta_rad));
+  out->set_a(s.a);
+  out->set_b(s.b);
+}
+
+void ErrorToProto(const b::ShotError& e, v1::ShotError* out) {
+  out->set_mean_m(e.mean_m);
+  out->set_rms_m(e.rms_m);
+  out->set_max_m(e.max_m);
+  out->set_points(static_cast<uint32_t>(e.points));
+}
+
+absl::StatusOr<b::Recording> ShotFromProto(const b::TableModel& model, const v1::RecordedShot& shot,
+                                           const std::string& field) {
+  b::Recording rec;
+  if (shot.name().size() > 64) {
+    return absl::InvalidArgumentError(absl::StrCat(field, ".name: at most 64 characters"));
+  }
+  rec.name = shot.name();
+  if (shot.balls_size() < 1 || shot.balls_size() > kMaxBalls) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("%s.balls: 1 to %d balls, got %d", field, kMaxBalls, shot.balls_size()));
+  }
+  for (int i = 0; i < shot.balls_size(); ++i) {
+    const v1::BallPlacement& p = shot.balls(i);
+    const std::string f = absl::StrFormat("%s.balls[%d]", field, i);
+    if (absl::Status s = CheckId(f + ".id", p.id()); !s.ok()) return s;
+    if (rec.initial.Find(p.id()) >= 0) {
+      return absl::InvalidArgumentError(absl::StrCat(f, ".id: \"", p.id(), "\" twice"));
+    }
+    if (!std::isfinite(p.x_m()) || !std::isfinite(p.y_m())) {
+      return absl::InvalidArgumentError(absl::StrCat(f, ": x_m and y_m must be finite"));
+    }
+    rec.initial.balls.push_back(
+        b::Ball{.id = p.id(), .r = Eigen::Vector3d(p.x_m(), p.y_m(), model.radius())});
+  }
+  if (absl::Status s = CheckId(field + ".cue_ball", shot.cue_ball()); !s.ok()) return s;
+  rec.cue = rec.initial.Find(shot.cue_ball());
+  if (rec.cue < 0) {
+    return absl::InvalidArgumentError(
+        absl::StrCat(field, ".cue_ball: \"", shot.cue_ball(), "\" is not one of the shot's balls"));
+  }
+  rec.track.reserve(static_cast<size_t>(shot.points_size()));
+  for (int i = 0; i < shot.points_size(); ++i) {
+    const v1::TrackedPoint& p = shot.points(i);
+    if (p.ball() >= static_cast<uint32_t>(shot.balls_size())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "%s.points[%d].ball: %d is not an index into balls (0..%d)", field, i, p.ball(),
+          shot.balls_size() - 1));
+    }
+    rec.track.push_back(b::TrackPoint{.t_s = p.t_s(), .ball = static_cast<int>(p.ball()),
+                                      .xy = Eigen::Vector2d(p.x_m(), p.y_m())});
+  }
+  if (shot.has_strike()) {
+    absl::StatusOr<b::CueStrike> strike = StrikeFromProto(shot.strike());
+    if (!strike.ok()) return PrefixStatus(field + ".", strike.status());
+    rec.strike = *strike;
+  }
+  if (absl::Status s = b::ValidateRecording(model, rec); !s.ok()) {
+    // The library's field names, as the request spells them.
+    std::string message(s.message());
+    for (const auto& [from, to] : {std::pair<std::string_view, std::string_view>{"track", "points"},
+                                   {"initial", "balls"},
+                                   {"cue", "cue_ball"}}) {
+      if (message.rfind(from, 0) == 0) {
+        message = std::string(to) + message.substr(from.size());
+        break;
+      }
+    }
+    return absl::InvalidArgumentError(absl::StrCat(field, ".", message));
+  }
+  return rec;
+}
+
+}  // namespace
+
+absl::StatusOr<CalibrationJob> CalibrationJobFromProto(const v1::CalibrateTableRequest& request) {
+  if (request.table().balls_size() > 0 || !request.table().rack().empty()) {
+    return absl::InvalidArgumentError(
+        "table: give the preset, params and cushion model only; each shot places its balls");
+  }
+  v1::TableSetup setup = request.table();
+  setup.set_rack("empty");
+  absl::StatusOr<TableBuild> table = TableFromProto(setup);
+  if (!table.ok()) return table.status();
+  absl::StatusOr<b::SolverOptions> solver = SolverFromProto(request.solver());
+  if (!solver.ok()) return solver.status();
+  CalibrationJob job{.spec = table->model.spec(), .solver = *solver};
+  if (request.shots_size() < 1 || request.shots_size() > kMaxCalibrationShots) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "shots: 1 to %d recorded shots, got %d", kMaxCalibrationShots, request.shots_size()));
+  }
+  int64_t points = 0;
+  for (const v1::RecordedShot& s : request.shots()) points += s.points_size();
+  if (points > kMaxCalibrationPoints) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "shots: at most %d tracked points in all, got %d", kMaxCalibrationPoints, points));
+  }
+  for (int i = 0; i < request.shots_size(); ++i) {
+    absl::StatusOr<b::Recording> rec =
+        ShotFromProto(table->model, request.shots(i), absl::StrFormat("shots[%d]", i));
+    if (!rec.ok()) return rec.status();
+    job.recordings.push_back(*std::move(rec));
+  }
+  b::CalibrationOptions& o = job.options;
+  for (int i = 0; i < request.fit_size(); ++i) {
+    const v1::FitParameter& p = request.fit(i);
+    const std::string f = absl::StrFormat("fit[%d]", i);
+    if (absl::Status s = CheckId(f + ".name", p.name()); !s.ok()) return s;
+    if (p.has_lo() != p.has_hi()) {
+      return absl::InvalidArgumentError(absl::StrCat(f, ": give both lo and hi, or neither"));
+    }
+    b::FitParam fp{.name = p.name()};
+    if (p.has_lo()) {
+      if (!std::isfinite(p.lo()) || !std::isfinite(p.hi()) || !(p.lo() < p.hi())) {
+        return absl::InvalidArgumentError(absl::StrCat(f, ": lo and hi must be finite, lo < hi"));
+      }
+      fp.lo = p.lo();
+      fp.hi = p.hi();
+    }
+    o.params.push_back(std::move(fp));
+  }
+  for (uint32_t h : request.heldout()) {
+    if (h >= static_cast<uint32_t>(request.shots_size())) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "heldout: %d is not a shot's index (0..%d)", h, request.shots_size() - 1));
+    }
+    o.heldout.push_back(static_cast<int>(h));
+  }
+  if (request.has_strike_window_s()) {
+    if (!(request.strike_window_s() > 0.0) || request.strike_window_s() > 3600.0) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "strike_window_s must be in (0, 3600] s, got %g", request.strike_window_s()));
+    }
+    o.strike_window_s = request.strike_window_s();
+  }
+  if (request.has_max_iterations()) {
+    if (request.max_iterations() < 1 || request.max_iterations() > 1000) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "max_iterations must be in [1, 1000], got %d", request.max_iterations()));
+    }
+    o.max_iterations = request.max_iterations();
+  }
+  if (request.has_max_simulations()) {
+    if (request.max_simulations() < 1 || request.max_simulations() > 1000000000) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "max_simulations must be in [1, 1e9], got %d", request.max_simulations()));
+    }
+    o.max_simulations = request.max_simulations();
+  }
+  o.strike_bounds.fit_elevation = request.fit_elevation();
+  // The options against the table and shots: parameter names and bounds.
+  if (absl::Status s = b::ValidateCalibration(job.spec, job.solver, job.recordings, o); !s.ok()) {
+    std::string message(s.message());
+    if (message.rfind("params: ", 0) == 0) message = "fit: " + message.substr(8);
+    return absl::InvalidArgumentError(message);
+  }
+  return job;
+}
+
+void CalibrationReportToProto(const CalibrationJob& job, const b::CalibrationReport& report,
+                              v1::CalibrationReport* out) {
+  for (const b::ParamReport& p : report.fitted) {
+    (*out->mutable_params())[p.name] = p.after;
+    v1::FittedParameter* f = out->add_fitted();
+    f->set_name(p.name);
+    f->set_before(p.before);
+    f->set_after(p.after);
+    f->set_lo(p.lo);
+    f->set_hi(p.hi);
+  }
+  for (size_t i = 0; i < report.shots.size(); ++i) {
+    const b::ShotReport& s = report.shots[i];
+    const b::Recording& rec = job.recordings[i];
+    const std::string& cue = rec.initial.balls[static_cast<size_t>(rec.cue)].id;
+    v1::ShotCalibration* c = out->add_shots();
+    c->set_name(s.name);
+    c->set_heldout(s.heldout);
+    StrikeToProto(s.strike_before, c->mutable_strike_before());
+    StrikeToProto(s.strike_after, c->mutable_strike_after());
+    c->mutable_strike_before()->set_ball(cue);
+    c->mutable_strike_after()->set_ball(cue);
+    ErrorToProto(s.before, c->mutable_before());
+    ErrorToProto(s.after, c->mutable_after());
+  }
+  out->set_train_before_m(report.train_before_m);
+  out->set_train_after_m(report.train_after_m);
+  out->set_heldout_before_m(report.heldout_before_m);
+  out->set_heldout_after_m(report.heldout_after_m);
+  out->set_iterations(static_cast<uint32_t>(report.iterations));
+  out->set_simulations(report.simulations);
+}
+
+}  // namespace sportsim::server

@@ -1,0 +1,149 @@
+#include "sim/billiards/track_file.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <map>
+#include <optional>
+
+#include "absl/strings/str_format.h"
+
+namespace sportsim::billiards {
+namespace {
+
+std::string_view Trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  return s;
+}
+
+std::vector<std::string_view> Cells(std::string_view line) {
+  std::vector<std::string_view> out;
+  size_t start = 0;
+  for (;;) {
+    const size_t comma = line.find(',', start);
+    out.push_back(Trim(line.substr(start, comma == std::string_view::npos ? comma : comma - start)));
+    if (comma == std::string_view::npos) return out;
+    start = comma + 1;
+  }
+}
+
+std::optional<double> Number(std::string_view s) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  double v = 0.0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+// A short quote of a cell for an error message.
+std::string Quote(std::string_view s) {
+  std::string q(s.substr(0, 24));
+  for (char& c : q) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  }
+  return "\"" + q + (s.size() > 24 ? "...\"" : "\"");
+}
+
+}  // namespace
+
+absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text) {
+  TrackFile out;
+  // Column indices of t, ball, x, y once the header is read.
+  int col[4] = {-1, -1, -1, -1};
+  bool header = false;
+  int rows = 0;
+  std::map<std::string, int, std::less<>> index;
+  std::vector<std::optional<Eigen::Vector2d>> before;  // last spot with t <= 0
+  std::vector<std::optional<std::pair<double, Eigen::Vector2d>>> first;  // first tracked
+  size_t pos = 0;
+  for (int line_no = 1; pos <= text.size(); ++line_no) {
+    const size_t nl = text.find('\n', pos);
+    const std::string_view line =
+        text.substr(pos, nl == std::string_view::npos ? std::string_view::npos : nl - pos);
+    pos = nl == std::string_view::npos ? text.size() + 1 : nl + 1;
+    const std::string_view trimmed = Trim(line);
+    if (trimmed.empty() || trimmed.front() == '#') continue;
+    const std::vector<std::string_view> cells = Cells(line);
+    if (!header) {
+      static constexpr std::string_view kNames[4][2] = {
+          {"t", "t_s"}, {"ball", "id"}, {"x", "x_m"}, {"y", "y_m"}};
+      for (int c = 0; c < static_cast<int>(cells.size()); ++c) {
+        std::string name(cells[static_cast<size_t>(c)]);
+        std::transform(name.begin(), name.end(), name.begin(),
+                       [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+        for (int k = 0; k < 4; ++k) {
+          if ((name == kNames[k][0] || name == kNames[k][1]) && col[k] < 0) col[k] = c;
+        }
+      }
+      for (int k = 0; k < 4; ++k) {
+        if (col[k] < 0) {
+          return absl::InvalidArgumentError(absl::StrFormat(
+              "line %d: the header must name the columns t, ball, x and y (or t_s, id, x_m, "
+              "y_m); no %s column",
+              line_no, kNames[k][0]));
+        }
+      }
+      header = true;
+      continue;
+    }
+    if (++rows > kMaxTrackRows) {
+      return absl::InvalidArgumentError(
+          absl::StrFormat("line %d: at most %d rows", line_no, kMaxTrackRows));
+    }
+    const int need = *std::max_element(col, col + 4) + 1;
+    if (static_cast<int>(cells.size()) < need) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "line %d: %d cells, the header's columns need %d", line_no, cells.size(), need));
+    }
+    double v[3];
+    static constexpr const char* kWhat[3] = {"t", "x", "y"};
+    static constexpr int kCol[3] = {0, 2, 3};
+    for (int k = 0; k < 3; ++k) {
+      const std::string_view cell = cells[static_cast<size_t>(col[kCol[k]])];
+      const std::optional<double> n = Number(cell);
+      if (!n || std::abs(*n) > 1e6) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "line %d: %s must be a finite number within 1e6, got %s", line_no, kWhat[k], Quote(cell)));
+      }
+      v[k] = *n;
+    }
+    const std::string_view id = cells[static_cast<size_t>(col[1])];
+    if (id.empty()) {
+      return absl::InvalidArgumentError(absl::StrFormat("line %d: the ball's id is empty", line_no));
+    }
+    auto it = index.find(id);
+    if (it == index.end()) {
+      it = index.emplace(std::string(id), static_cast<int>(out.balls.size())).first;
+      out.balls.emplace_back(id);
+      before.emplace_back();
+      first.emplace_back();
+    }
+    const int b = it->second;
+    const Eigen::Vector2d xy(v[1], v[2]);
+    if (v[0] <= 0.0) {
+      before[static_cast<size_t>(b)] = xy;
+    } else {
+      out.points.push_back(TrackPoint{.t_s = v[0], .ball = b, .xy = xy});
+      auto& f = first[static_cast<size_t>(b)];
+      if (!f || v[0] < f->first) f = std::make_pair(v[0], xy);
+    }
+  }
+  if (!header) return absl::InvalidArgumentError("the file has no header row (t, ball, x, y)");
+  if (out.balls.empty()) return absl::InvalidArgumentError("the file has no rows");
+  std::stable_sort(out.points.begin(), out.points.end(),
+                   [](const TrackPoint& a, const TrackPoint& b) { return a.t_s < b.t_s; });
+  for (size_t b = 0; b < out.balls.size(); ++b) {
+    out.spots.push_back(before[b] ? *before[b] : first[b]->second);
+  }
+  for (const TrackPoint& p : out.points) {
+    if ((p.xy - out.spots[static_cast<size_t>(p.ball)]).norm() > 0.01) {
+      out.cue = p.ball;
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace sportsim::billiards

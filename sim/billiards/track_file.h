@@ -1,0 +1,43 @@
+// Recorded shots as text: a table of tracked positions, one row a ball at a time, as trackers
+// and `sportsim shot simulate --format csv` write them.
+//
+//   t_s,id,x_m,y_m[,...]      header: the columns t (or t_s), ball (or id), x (or x_m), y (or
+//   0,white,-0.7,0.2                  y_m) in any order, other columns ignored
+//   0.02,white,-0.66,0.21     seconds from the strike; metres in the table frame (origin at
+//   ...                               the centre of the playing area)
+//
+// Lines starting with '#' and blank lines are skipped. Rows with t <= 0 say where a ball
+// stood before the strike (its last such row); a ball without one starts where it is first
+// tracked. Rows with t > 0 are its track. The struck ball is the first whose tracked position
+// leaves its spot by more than a centimetre (or one named by the caller).
+#ifndef SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
+#define SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "Eigen/Core"
+#include "absl/status/statusor.h"
+#include "sim/billiards/calibrate.h"
+
+namespace sportsim::billiards {
+
+struct TrackFile {
+  std::vector<std::string> balls;        ///< ids, in order of first appearance
+  std::vector<Eigen::Vector2d> spots;    ///< where each stood before the strike
+  int cue = -1;                          ///< the first ball to move (index), -1: none moved
+  std::vector<TrackPoint> points;        ///< t > 0, in time order (a file's order among ties)
+};
+
+/// Most rows a track file may hold.
+inline constexpr int kMaxTrackRows = 1000000;
+
+/// Parses a track file. InvalidArgument naming the line and the column for a missing or
+/// malformed header, a row with too few cells, a number that does not parse or is not finite,
+/// an empty ball id, or more than kMaxTrackRows rows. Rows need not be in time order.
+absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text);
+
+}  // namespace sportsim::billiards
+
+#endif  // SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
