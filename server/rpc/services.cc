@@ -778,6 +778,10 @@ class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTabl
     if (st.code() == absl::StatusCode::kResourceExhausted &&
         absl::StrContains(st.message(), "--max_request_cpu")) {
       pool->CountBudgetExhausted();
+      st = absl::ResourceExhaustedError(absl::StrFormat(
+          "the calibration used its CPU budget (--max_request_cpu) after %.3g s: give fewer "
+          "shots, parameters or max_iterations, or run it on a server with a larger budget",
+          control.CpuSeconds()));
     }
     v1::CalibrateTableResponse last;
     if (st.ok()) {

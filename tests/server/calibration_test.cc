@@ -13,6 +13,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "absl/strings/match.h"
+#include "absl/time/time.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
 #include "server/app/server_app.h"
@@ -33,6 +34,9 @@ class CalibrationTest : public ::testing::Test {
     // Recorded shots are larger than the requests the server takes by default (64 KiB): an
     // operator who calibrates raises --max_request_bytes.
     config_.max_receive_message_bytes = 8 << 20;
+    // A calibration takes seconds of CPU (ten times more under the sanitizers): more than a
+    // request's default budget.
+    config_.work.cpu_budget = absl::Seconds(600);
   }
   void Start() {
     absl::StatusOr<std::unique_ptr<ServerApp>> app = ServerApp::Start(config_);
@@ -223,6 +227,7 @@ TEST_F(CalibrationTest, TheCpuBudgetAndCancellationStopIt) {
   grpc::Status st = Calibrate(Request(), &msgs);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
   EXPECT_THAT(st.error_message(), HasSubstr("--max_request_cpu"));
+  EXPECT_THAT(st.error_message(), HasSubstr("fewer shots"));
 
   app_.reset();
   config_.work.cpu_budget = absl::Seconds(600);
