@@ -12,8 +12,9 @@
 //    recorded shots from a tracker of your own table or a public set (docs/billiards.md);
 //    nothing third-party is committed.
 //
-// For each model (han, mathavan2010), with the preset's constants and calibrated (its cloth and
-// cushion constants fitted on the first half of the shots), on the second half (held out):
+// For each model (han, mathavan2010), with the preset's constants, with its rolling resistance
+// alone fitted, and calibrated (its cloth and cushion constants fitted), each fit on the first
+// half of the shots, scored on the second half (held out):
 //  - fit: the strike fitted to the whole shot, the median over shots of the mean distance
 //    between tracked and simulated centres (every ball, every frame);
 //  - predict: the strike fitted on the first 0.4 s only, the median distance of the struck
@@ -186,6 +187,14 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
     TableSpec spec = preset;
     spec.params.cushion_model = cm;
     Score(source, name, "preset", spec, test);
+    // The rolling resistance alone: what one constant from the right cloth is worth.
+    CalibrationOptions roll;
+    roll.params.push_back({.name = "mu_roll"});
+    if (absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, train, roll); r.ok()) {
+      TableSpec s = spec;
+      s.params = r->params;
+      Score(source, name, "rolling_only", s, test);
+    }
     CalibrationOptions o;
     for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2"}) o.params.push_back({.name = p});
     if (cm == CushionModel::kHan) {

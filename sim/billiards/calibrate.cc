@@ -559,8 +559,8 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   report.shots.resize(static_cast<size_t>(shots));
   StrikeMap map{options.strike_bounds, 0.999 * spec.params.miscue_limit};
 
-  // 1. Every shot's strike under the starting parameters: the "before" report and the joint
-  // fit's starting point. Known strikes are kept.
+  // 1. Every shot's strike under the starting parameters: the "before" report and the fit's
+  // starting point. Known strikes are kept.
   std::vector<CueStrike> strikes(static_cast<size_t>(shots));
   for (int i = 0; i < shots; ++i) {
     const Recording& rec = recordings[static_cast<size_t>(i)];
@@ -744,8 +744,8 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   absl::StatusOr<TableModel> model1 = TableModel::Create(fitted_spec);
   if (!model1.ok()) return model1.status();
 
-  // 3. The "after" report: training shots with their jointly fitted strikes, held-out ones with
-  // strikes fitted afresh under the fitted parameters.
+  // 3. The "after" report: training shots with the strikes fitted along with the parameters,
+  // held-out ones with strikes fitted afresh under the fitted parameters.
   std::vector<double> train_before, train_after, held_before, held_after;
   for (int i = 0; i < shots; ++i) {
     const Recording& rec = recordings[static_cast<size_t>(i)];
