@@ -1,5 +1,6 @@
 // `sportsim table ...`: authoritative tables (Billiards/CreateTable ... WatchTable).
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -693,9 +694,6 @@ namespace {
 // table calibrate FILE...: the files' recorded shots, the fit's progress on stderr, the report.
 int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
   if (args.empty()) return UsageError("table calibrate needs one or more track files (CSV)");
-  if (Given("rack") || !RepeatedFlagValues("ball").empty()) {
-    return UsageError("table calibrate: --rack and --ball do not apply (each file places its balls)");
-  }
   v1::CalibrateTableRequest request;
   if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
   request.mutable_table()->clear_rack();
@@ -731,7 +729,7 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
     absl::StatusOr<billiards::TrackFile> file = billiards::ParseTrackCsv(text);
     if (!file.ok()) return UsageError(InvalidValue(path + ": " + std::string(file.status().message())));
     v1::RecordedShot* shot = request.add_shots();
-    shot->set_name(path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1).substr(0, 64));
+    shot->set_name(std::filesystem::path(path).filename().string().substr(0, 64));
     for (size_t b = 0; b < file->balls.size(); ++b) {
       v1::BallPlacement* p = shot->add_balls();
       p->set_id(file->balls[b]);

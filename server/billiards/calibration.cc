@@ -16,18 +16,6 @@ namespace {
 
 namespace b = ::sportsim::billiards;
 
-void StrikeToProto(const b::CueStrike& s, v1::CueStrike* out) {
-  if (s.ball_speed) {
-    out->set_ball_speed_mps(s.speed_mps);
-  } else {
-    out->set_speed_mps(s.speed_mps);
-  }
-  out->set_phi_deg(RadToDeg(s.phi_rad));
-  out->set_theta_deg(RadToDeg(s.theta_rad));
-  out->set_a(s.a);
-  out->set_b(s.b);
-}
-
 void ErrorToProto(const b::ShotError& e, v1::ShotError* out) {
   out->set_mean_m(e.mean_m);
   out->set_rms_m(e.rms_m);

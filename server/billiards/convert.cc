@@ -228,6 +228,18 @@ absl::StatusOr<b::CueStrike> StrikeFromProto(const v1::CueStrike& strike) {
   return s;
 }
 
+void StrikeToProto(const b::CueStrike& s, v1::CueStrike* out) {
+  if (s.ball_speed) {
+    out->set_ball_speed_mps(s.speed_mps);
+  } else {
+    out->set_speed_mps(s.speed_mps);
+  }
+  out->set_phi_deg(RadToDeg(s.phi_rad));
+  out->set_theta_deg(RadToDeg(s.theta_rad));
+  out->set_a(s.a);
+  out->set_b(s.b);
+}
+
 absl::StatusOr<ShotJob> ShotJobFromProto(const v1::SimulateShotRequest& request) {
   absl::StatusOr<TableBuild> table = TableFromProto(request.table());
   if (!table.ok()) return table.status();

@@ -37,6 +37,8 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup);
 
 absl::StatusOr<billiards::SolverOptions> SolverFromProto(const v1::SolverConfig& solver);
 absl::StatusOr<billiards::CueStrike> StrikeFromProto(const v1::CueStrike& strike);
+/// The inverse (no ball, noise or seed: the caller names the ball).
+void StrikeToProto(const billiards::CueStrike& strike, v1::CueStrike* out);
 
 /// Everything a SimulateShotRequest asks for, validated, with the shot already applied to the
 /// state (strike or explicit motions).

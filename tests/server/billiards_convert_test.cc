@@ -51,6 +51,31 @@ v1::SimulateShotRequest StraightShot() {
 // The default engine is the event engine; asking for drag without naming an engine picks the
 // stepped engine (drag has no closed form), while naming the event engine with drag is an error
 // (tested with the rejections below).
+// A strike written by StrikeToProto reads back as itself (to the degree-radian rounding), with
+// the cue's speed or the ball's as it was.
+TEST(BilliardsConvertTest, StrikesRoundTrip) {
+  for (bool ball_speed : {false, true}) {
+    b::CueStrike s;
+    s.ball_speed = ball_speed;
+    s.speed_mps = 2.75;
+    s.phi_rad = -1.234;
+    s.theta_rad = 0.2;
+    s.a = 0.31;
+    s.b = -0.17;
+    v1::CueStrike p;
+    StrikeToProto(s, &p);
+    EXPECT_EQ(p.has_ball_speed_mps(), ball_speed);
+    absl::StatusOr<b::CueStrike> back = StrikeFromProto(p);
+    ASSERT_TRUE(back.ok()) << back.status();
+    EXPECT_EQ(back->ball_speed, ball_speed);
+    EXPECT_EQ(back->speed_mps, 2.75);
+    EXPECT_NEAR(back->phi_rad, -1.234, 1e-15);
+    EXPECT_NEAR(back->theta_rad, 0.2, 1e-15);
+    EXPECT_EQ(back->a, 0.31);
+    EXPECT_EQ(back->b, -0.17);
+  }
+}
+
 TEST(BilliardsConvertTest, DragWithoutAnEngineNamedRunsStepped) {
   v1::SimulateShotRequest r = Strike2();
   r.mutable_solver()->add_enable("drag");
