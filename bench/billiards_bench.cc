@@ -2,7 +2,8 @@
 // per integrator at the default step (1/960 s); the 8-ball break (16 balls, 8 m/s) with the
 // event engine and at game steps with the stepped one, with effects switched off or on
 // (orientation tracking off; drag on, stepped only); and a batch of random shots with the event
-// engine (what a bot needs). Reports shots per second and events per shot. (Spin decay off is
+// engine (what a bot needs). Reports shots per second and events per shot. And one
+// ball-cushion impact per cushion model, over 256 seeded random approaches and spins. (Spin decay off is
 // not benchmarked: a ball with side spin then never comes to rest.)
 #include <benchmark/benchmark.h>
 
@@ -13,6 +14,8 @@
 #include "absl/strings/str_format.h"
 #include "bench/billiards_scenes.h"
 #include "bench/billiards_storms.h"
+#include "sim/billiards/cloth.h"
+#include "sim/billiards/collision.h"
 #include "sim/billiards/shot.h"
 
 namespace sportsim::billiards {
@@ -161,6 +164,35 @@ void BM_RackShots(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(batch.size()));
 }
 BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
+
+// One impact per iteration, cycling through 256 random approaches (0.05-3 m/s into the rail,
+// up to 3 m/s along it, spins to 150 rad/s) on the pool-9ft nose. range(0): the CushionModel.
+void BM_CushionImpact(benchmark::State& state) {
+  TableSpec spec = *MakeTablePreset("pool-9ft");
+  spec.params.cushion_model = static_cast<CushionModel>(state.range(0));
+  const TableModel model = *TableModel::Create(spec);
+  state.SetLabel(state.range(0) == 0 ? "han" : state.range(0) == 2 ? "mathavan2010" : "stronge");
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Ball> balls(256);
+  for (Ball& b : balls) {
+    b.v = {3.0 * u(rng), 0.05 + 1.475 * (1.0 + u(rng)), 0.0};
+    b.w = {150.0 * u(rng), 150.0 * u(rng), 150.0 * u(rng)};
+    b.state = Classify(model, b);
+  }
+  size_t i = 0;
+  for (auto _ : state) {
+    Ball b = balls[i++ % balls.size()];
+    CollideCushion(model, Eigen::Vector2d(0.0, -1.0), &b);
+    benchmark::DoNotOptimize(b);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_CushionImpact)
+    ->Arg(static_cast<int>(CushionModel::kHan))
+    ->Arg(static_cast<int>(CushionModel::kStrongeCompliant))
+    ->Arg(static_cast<int>(CushionModel::kMathavan2010))
+    ->Unit(benchmark::kNanosecond);
 
 }  // namespace
 }  // namespace sportsim::billiards

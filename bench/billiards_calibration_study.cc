@@ -12,7 +12,7 @@
 //    recorded shots from a tracker of your own table or a public set (docs/billiards.md);
 //    nothing third-party is committed.
 //
-// For each model (han, mathavan2010), with the preset's constants, with its rolling resistance
+// For each model (han, mathavan2010, stronge), with the preset's constants, with its rolling resistance
 // alone fitted, and calibrated (its cloth and cushion constants fitted), each fit on the first
 // half of the shots, scored on the second half (held out):
 //  - fit: the strike fitted to the whole shot, the median over shots of the mean distance
@@ -182,8 +182,11 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
   const size_t half = all.size() / 2;
   const std::vector<Recording> train(all.begin(), all.begin() + static_cast<long>(half));
   const std::vector<Recording> test(all.begin() + static_cast<long>(half), all.end());
-  for (CushionModel cm : {CushionModel::kHan, CushionModel::kMathavan2010}) {
-    const std::string name = cm == CushionModel::kHan ? "han" : "mathavan2010";
+  for (CushionModel cm : {CushionModel::kHan, CushionModel::kMathavan2010,
+                          CushionModel::kStrongeCompliant}) {
+    const std::string name = cm == CushionModel::kHan            ? "han"
+                             : cm == CushionModel::kMathavan2010 ? "mathavan2010"
+                                                                 : "stronge";
     TableSpec spec = preset;
     spec.params.cushion_model = cm;
     Score(source, name, "preset", spec, test);
@@ -197,7 +200,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
     }
     CalibrationOptions o;
     for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2"}) o.params.push_back({.name = p});
-    if (cm == CushionModel::kHan) {
+    if (cm != CushionModel::kMathavan2010) {
       o.params.push_back({.name = "e_cushion"});
       o.params.push_back({.name = "f_cushion"});
     } else {

@@ -67,7 +67,7 @@ const Flags& SetupFlags() {
       {"ball", "put a ball at rest at (X, Y) m; an id already racked moves there, a new one is "
                "added (repeatable, each id once)"},
       {"param", "a model parameter (repeatable; `sportsim info` lists names, units, ranges)"},
-      {"cushion_model", "han (default), mathavan2010 or mirror"},
+      {"cushion_model", "han (default), mathavan2010, stronge or mirror"},
       {"jitter", "seeded random gaps between racked balls, [0, 0.01] m (default 0)"},
       {"rack_seed", "seed of --jitter (default 0)"},
   };
@@ -256,7 +256,7 @@ std::vector<CommandSpec> MakeSpecs() {
        "files: t, ball, x, y; `shot simulate --format csv` writes one); progress on stderr",
        Join({{{"table", "table preset to start from (default pool-9ft)"},
               {"param", "a starting parameter (repeatable)"},
-              {"cushion_model", "han (default), mathavan2010 or mirror"}},
+              {"cushion_model", "han (default), mathavan2010, stronge or mirror"}},
              SolverFlags(),
              {{"fit", "parameters to fit, NAME or NAME=LO:HI, comma separated (default bounds: "
                       "the published ranges; none: the strikes only)"},

@@ -45,7 +45,7 @@ ABSL_FLAG(std::string, strike_ball, "cue", "Ball the cue strikes");
 ABSL_FLAG(std::string, engine, "", "Billiards engine: event|stepped (default: the server's)");
 ABSL_FLAG(bool, no_ccd, false, "Stepped engine without continuous collision detection");
 ABSL_FLAG(std::vector<std::string>, enable, {}, "Effects off by default to switch on: drag");
-ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mathavan2010|mirror");
+ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mathavan2010|stronge|mirror");
 ABSL_FLAG(std::optional<double>, sample_rate, std::nullopt, "Trajectory samples per second");
 ABSL_FLAG(std::optional<double>, max_time, std::nullopt, "Stop after this much simulated time (s)");
 ABSL_FLAG(int, samples, 1, "shot batch: noise samples of each strike, [1, 1000]");
@@ -96,7 +96,10 @@ std::optional<std::string> BuildSetup(v1::TableSetup* t) {
   if (cm == "mirror") t->set_cushion_model(v1::CUSHION_MODEL_MIRROR);
   else if (cm == "han") t->set_cushion_model(v1::CUSHION_MODEL_HAN);
   else if (cm == "mathavan2010") t->set_cushion_model(v1::CUSHION_MODEL_MATHAVAN_2010);
-  else if (!cm.empty()) return "--cushion-model must be han, mathavan2010 or mirror, got '" + cm + "'";
+  else if (cm == "stronge") t->set_cushion_model(v1::CUSHION_MODEL_STRONGE_COMPLIANT);
+  else if (!cm.empty()) {
+    return "--cushion-model must be han, mathavan2010, stronge or mirror, got '" + cm + "'";
+  }
   return std::nullopt;
 }
 

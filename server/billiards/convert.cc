@@ -102,6 +102,9 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
     case v1::CUSHION_MODEL_MATHAVAN_2010:
       spec->params.cushion_model = b::CushionModel::kMathavan2010;
       break;
+    case v1::CUSHION_MODEL_STRONGE_COMPLIANT:
+      spec->params.cushion_model = b::CushionModel::kStrongeCompliant;
+      break;
     default:
       return absl::InvalidArgumentError(
           absl::StrFormat("table.cushion_model: unknown value %d", setup.cushion_model()));

@@ -248,6 +248,119 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
   ball->w = wx * ex + wy * ey + wz * ez;
 }
 
+// Stronge's compliant contact, in time tau = omega_n t (omega_n the normal spring's frequency)
+// and velocities over the approach speed. The normal force per unit (m v0 omega_n) is sin tau
+// in compression (tau <= pi/2) and sin(phase) in restitution, phase = tau / e + (pi/2) (1 -
+// 1/e), until phase = pi at tau_f = (1 + e) pi/2; its impulse is 1 - cos tau, then 1 - e cos
+// phase. The tangential spring's deflection u (units v0 / omega_n) pulls the contact back with
+// force u / eta^2 (eta^2 = beta / r^2, the stiffness ratio k / k_t), so dv/dtau = -r^2 u.
+// Stick: u' = v, a harmonic motion of frequency r, while |u| <= mu eta^2 Fn. Slip in direction
+// s: the force is s mu Fn, so u = s mu eta^2 Fn and v falls by beta s mu times the normal
+// impulse, while the interface slip v - u' keeps the sign s.
+namespace {
+
+constexpr double kHalfPi = 1.5707963267948966;
+
+class CompliantContact {
+ public:
+  CompliantContact(double e, double mu, double beta, double r)
+      : e_(e), mu_(mu), beta_(beta), r_(r), eta2_(beta / (r * r)),
+        end_(e > 0.0 ? (1.0 + e) * kHalfPi : kHalfPi) {}
+
+  double Solve(double v0) {
+    double t = 0.0, v = v0, u = 0.0;
+    // At tau = 0 the normal force is zero: the spring sticks if the friction it gains, mu eta^2
+    // tau, outgrows the deflection, v0 tau.
+    bool stick = v0 <= mu_ * eta2_;
+    double s = 1.0;
+    // Each phase ends at a switch or at the end; more than a handful means rounding ping-pong
+    // at a switch, and the rest is taken as slip.
+    for (int phase = 0; phase < 16 && t < end_; ++phase) {
+      if (stick) {
+        const double t0 = t, u0 = u, v1 = v;
+        auto deflection = [&](double x) {
+          return u0 * std::cos(r_ * (x - t0)) + v1 / r_ * std::sin(r_ * (x - t0));
+        };
+        // The spring's swing against what friction holds: not monotone, so sampled.
+        t = FirstDrop(t0, 64, [&](double x) {
+          return mu_ * eta2_ * Force(x) - std::abs(deflection(x));
+        });
+        u = deflection(t);
+        v = -r_ * u0 * std::sin(r_ * (t - t0)) + v1 * std::cos(r_ * (t - t0));
+        s = u >= 0.0 ? 1.0 : -1.0;
+        stick = false;
+      } else {
+        const double t0 = t, v1 = v, p0 = Impulse(t0), sign = s;
+        auto speed = [&](double x) { return v1 - beta_ * sign * mu_ * (Impulse(x) - p0); };
+        // The interface slip: its rate is -mu Fn (beta - eta^2) in compression and -mu Fn
+        // (beta - eta^2 / e^2) in restitution, one sign in each, so it is monotone in each.
+        t = FirstDrop(t0, 1, [&](double x) {
+          return sign * (speed(x) - eta2_ * sign * mu_ * ForceRate(x));
+        });
+        v = speed(t);
+        u = sign * mu_ * eta2_ * Force(t);
+        stick = true;
+      }
+    }
+    if (t < end_) v -= beta_ * s * mu_ * (Impulse(end_) - Impulse(t));
+    return v;
+  }
+
+ private:
+  double Phase(double t) const { return t / e_ + kHalfPi * (1.0 - 1.0 / e_); }
+  double Force(double t) const { return t <= kHalfPi ? std::sin(t) : std::sin(Phase(t)); }
+  double ForceRate(double t) const {
+    return t <= kHalfPi ? std::cos(t) : std::cos(Phase(t)) / e_;
+  }
+  double Impulse(double t) const {
+    return t <= kHalfPi ? 1.0 - std::cos(t) : 1.0 - e_ * std::cos(Phase(t));
+  }
+
+  // The first tau in (a, end] where f turns negative (f(a) is about zero or positive); end when
+  // it does not. Each of compression and restitution (where the force's law changes) is
+  // sampled at `samples` points, and a sign change refined by bisection to rounding. One
+  // sample a phase suffices where f is monotone in each.
+  template <typename F>
+  double FirstDrop(double a, int samples, F f) const {
+    double lo = a;
+    auto step = [&](double from, double to) -> bool {
+      for (int k = 1; k <= samples; ++k) {
+        const double x = k == samples ? to : from + (to - from) * k / samples;
+        if (f(x) < 0.0) {
+          double hi = x;
+          for (int i = 0; i < 200 && hi - lo > 1e-15 * (1.0 + hi); ++i) {
+            const double mid = 0.5 * (lo + hi);
+            (f(mid) < 0.0 ? hi : lo) = mid;
+          }
+          lo = hi;
+          return true;
+        }
+        lo = x;
+      }
+      return false;
+    };
+    if (a < kHalfPi && end_ > kHalfPi) {
+      if (step(a, kHalfPi)) return lo;
+      return step(kHalfPi, end_) ? lo : end_;
+    }
+    return step(a, end_) ? lo : end_;
+  }
+
+  double e_, mu_, beta_, r_, eta2_, end_;
+};
+
+}  // namespace
+
+double CompliantTangentialRebound(double slip, double e, double mu, double beta,
+                                  double frequency_ratio) {
+  if (!(slip > 0.0) || !(mu > 0.0)) return slip;
+  return CompliantContact(e, mu, beta, frequency_ratio).Solve(slip);
+}
+
+double StrongeFrequencyRatio(double poisson) {
+  return std::sqrt(3.5 * 2.0 * (1.0 - poisson) / (2.0 - poisson));
+}
+
 bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball* ball) {
   const Eigen::Vector3d nh(normal.x(), normal.y(), 0.0);
   const double vn = ball->v.dot(nh);
@@ -259,8 +372,9 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
     CollideCushionMathavan(model, nh, -vn < kRestingContactSpeed ? 0.0 : p.e_cushion_mathavan,
                            p.f_cushion_mathavan, p.mu_slide, ball);
   } else {
-    // The nose touches the ball at angle theta_a above its equator: contact point
-    // r_c = R (-cos nh + sin z^), contact normal into the ball n = cos nh - sin z^.
+    // kHan and kStrongeCompliant. The nose touches the ball at angle theta_a above its
+    // equator: contact point r_c = R (-cos nh + sin z^), contact normal into the ball
+    // n = cos nh - sin z^.
     const double m = model.mass();
     const double radius = model.radius();
     const double s = model.cushion_sin();
@@ -276,7 +390,14 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
     Eigen::Vector3d friction = Eigen::Vector3d::Zero();
     const double slip = st.norm();
     if (slip > 0.0) {
-      const double pt = std::min(p.f_cushion * jn, 2.0 * m * slip / 7.0);
+      double pt = std::min(p.f_cushion * jn, 2.0 * m * slip / 7.0);
+      const double approach = -ball->v.dot(n);
+      if (p.cushion_model == CushionModel::kStrongeCompliant && approach > 0.0) {
+        // The same contact as springs: the slip after, over the approach speed along n.
+        const double after = CompliantTangentialRebound(
+            slip / approach, e, p.f_cushion, 3.5, StrongeFrequencyRatio(p.cushion_poisson_ratio));
+        pt = (slip - after * approach) * m / 3.5;
+      }
       friction = -(pt / slip) * st;
     }
     ball->v += (jn * n + friction) / m;

@@ -47,6 +47,24 @@ bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& normal, double e,
                             double mu_cushion, double mu_slate, Ball* ball);
 
+/// Stronge's compliant impact of a sphere on a rough surface, in its contact's own terms. The
+/// contact is a normal spring (a loading stiffness k, unloading k / e^2: the kinematic
+/// restitution e) and a tangential spring k_t, sticking while its force is within mu times the
+/// normal force and slipping (at that force) when not. Velocities are the contact point's, in
+/// units of the approach speed: `slip` >= 0 is the tangential one before; returns the tangential
+/// one after, along the same direction (negative: reversed). `beta` is the body's inverse
+/// tangential effective mass at the contact over its normal one (7/2 for a free solid sphere);
+/// `frequency_ratio` is the tangential over the normal vibration frequency of the contact,
+/// sqrt(beta k_t / k) (StrongeFrequencyRatio). Each phase (compression or restitution, stick or
+/// slip) has a closed form; the switches between them are found to rounding by bisection.
+double CompliantTangentialRebound(double slip, double e, double mu, double beta,
+                                  double frequency_ratio);
+
+/// The contact's tangential over normal frequency for a sphere (beta 7/2) on an elastic body of
+/// Poisson ratio `poisson`: k_t / k = 2 (1 - nu) / (2 - nu) (Johnson 1985, sec. 7.4, after
+/// Mindlin), so sqrt(7/2 * 2 (1 - nu) / (2 - nu)): 1.528 for rubber (0.5), 1.871 at 0.
+double StrongeFrequencyRatio(double poisson);
+
 /// Resolves a resting ball-ball contact (approach below kRestingContactSpeed, or below the
 /// event engine's kTrainContactSpeed when it continues a sustained contact) as a sustained
 /// contact: a finite force, small against the cloth's friction, so a ball that is rolling,

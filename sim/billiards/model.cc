@@ -15,7 +15,7 @@ constexpr std::array<std::string_view, 8> kEffectNames = {
     "drag", "spin_decay", "rolling_resistance", "ball_friction",
     "cushions", "pockets", "orientation", "squirt"};
 
-constexpr std::array<ParamInfo, 22> kParams = {{
+constexpr std::array<ParamInfo, 23> kParams = {{
     {"gravity_mps2", "m/s^2", "gravitational acceleration g", &PhysicsParams::gravity_mps2, 0.1, 100},
     {"ball_radius_m", "m", "ball radius R", &PhysicsParams::ball_radius_m, 0.005, 0.1},
     {"ball_mass_kg", "kg", "ball mass m (inertia 2/5 m R^2)", &PhysicsParams::ball_mass_kg, 0.01, 2},
@@ -31,6 +31,7 @@ constexpr std::array<ParamInfo, 22> kParams = {{
     {"e_cushion_mathavan", "", "Mathavan 2010 cushion: energetic restitution at the nose", &PhysicsParams::e_cushion_mathavan, 0, 1},
     {"f_cushion_mathavan", "", "Mathavan 2010 cushion: ball-cushion sliding friction", &PhysicsParams::f_cushion_mathavan, 0, 2},
     {"cushion_impulse_steps", "", "Mathavan 2010 cushion: impulse steps (accuracy)", &PhysicsParams::cushion_impulse_steps, 10, 100000},
+    {"cushion_poisson_ratio", "", "Stronge compliant cushion: Poisson ratio of the rubber (stiffness ratio)", &PhysicsParams::cushion_poisson_ratio, 0, 0.5},
     {"cushion_height_m", "m", "cushion nose height above the slate h (R < h < 2R)", &PhysicsParams::cushion_height_m, 0.005, 0.2},
     {"cue_mass_kg", "kg", "cue mass M", &PhysicsParams::cue_mass_kg, 0.05, 5},
     {"cue_end_mass_kg", "kg", "cue end mass m_e (squirt)", &PhysicsParams::cue_end_mass_kg, 0.0005, 1},

@@ -17,6 +17,10 @@
 // - S. Mathavan, M. R. Jackson, R. M. Parkin, "A theoretical analysis of billiard ball dynamics
 //   under cushion impacts", Proc. IMechE Part C 224 (2010): restitution 0.98 and ball-cushion
 //   friction 0.14 fitted to their snooker cushion experiments (normal speeds up to ~2.5 m/s).
+// - W. J. Stronge, "Planar impact of rough compliant bodies", Int. J. Impact Eng. 15 (1994), and
+//   "Impact Mechanics" (Cambridge, 2000), ch. 5: a contact with normal and tangential springs.
+// - K. L. Johnson, "Contact Mechanics" (Cambridge, 1985), sec. 7.4 (after Mindlin 1949): the
+//   tangential to normal stiffness of a contact on an elastic body, 2 (1 - nu) / (2 - nu).
 #ifndef SPORTSIM_SIM_BILLIARDS_MODEL_H_
 #define SPORTSIM_SIM_BILLIARDS_MODEL_H_
 
@@ -81,6 +85,13 @@ enum class CushionModel : uint8_t {
   /// back e_cushion_mathavan^2 of the compression's (an energetic restitution).
   /// cushion_impulse_steps sets the integration's accuracy (docs/billiards.md).
   kMathavan2010,
+  /// Stronge's compliant contact at Han's nose: the same restitution e_c and normal impulse as
+  /// kHan, but the nose is a pair of springs, normal and tangential, whose stiffness ratio is
+  /// the cushion rubber's (cushion_poisson_ratio). The tangential spring sticks while the
+  /// friction f_c can hold it and slips when not; what it stored comes back as the ball leaves,
+  /// so a grazing contact can reverse its slip (tangential restitution). Solved exactly in
+  /// time, stick and slip phases alike (docs/billiards.md).
+  kStrongeCompliant,
 };
 
 /// Numeric model parameters, with the typical pool values as defaults. Every field can be set by
@@ -102,6 +113,7 @@ struct PhysicsParams {
   double e_cushion_mathavan = 0.98;    ///< kMathavan2010: energetic restitution at the nose
   double f_cushion_mathavan = 0.14;    ///< kMathavan2010: ball-cushion sliding friction
   double cushion_impulse_steps = 500;  ///< kMathavan2010: impulse steps over a (1+e) m v_n impact
+  double cushion_poisson_ratio = 0.5;  ///< kStrongeCompliant: the cushion rubber's Poisson ratio
   double cushion_height_m = 0.036;     ///< h: cushion nose above the slate (m); R < h < 2R
   double cue_mass_kg = 0.54;           ///< M: cue mass (kg), 19 oz
   double cue_end_mass_kg = 0.170 / 30; ///< m_e: the cue's effective end mass for squirt (kg)

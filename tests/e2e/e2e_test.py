@@ -385,6 +385,29 @@ class CliAgainstServer(unittest.TestCase):
         self.assertAlmostEqual(after["cue"]["vy_mps"], 0.0, places=9)
         self.assertGreater(out["balls"][1]["x_m"], 0)  # ball 1 ended up on the +x side
 
+    def test_cushion_models(self):
+        # A stun ball into the top rail, slightly off square (still sliding when it gets
+        # there): every model rebounds it; the compliant cushion's tangential spring sends it
+        # off elsewhere than Han's rigid nose.
+        shot = ("shot", "simulate", "--table", "pool-9ft", "--rack", "empty", "--ball",
+                "cue@0.6,0.45", "--ball-speed", "3", "--phi", "85")
+        rests = {}
+        for model in ("han", "stronge", "mathavan2010", "mirror"):
+            r = cli(self.server.address, "--format", "json", *shot, "--cushion-model", model)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            out = json.loads(r.stdout)
+            cushions = [e for e in out["events"] if e["kind"] == "ball_cushion"]
+            self.assertTrue(cushions, model)
+            rests[model] = (out["balls"][0]["x_m"], out["balls"][0]["y_m"])
+        self.assertNotEqual(rests["han"], rests["stronge"])
+        r = cli(self.server.address, *shot, "--cushion-model", "stronge", "--param",
+                "cushion_poisson_ratio=0.7")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("cushion_poisson_ratio", r.stderr)
+        r = cli(self.server.address, *shot, "--cushion-model", "springy")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("han, mathavan2010, stronge or mirror", r.stderr)
+
     def test_shot_simulate_svg(self):
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "shot.svg")

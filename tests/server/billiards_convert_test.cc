@@ -196,6 +196,16 @@ TEST(BilliardsConvertTest, CushionModelMirror) {
   EXPECT_EQ(job->table.model.params().cushion_impulse_steps, 1000);
   (*r.mutable_table()->mutable_params())["cushion_impulse_steps"] = 5;
   EXPECT_THAT(ShotJobFromProto(r).status().message(), ::testing::HasSubstr("cushion_impulse_steps"));
+  r.mutable_table()->clear_params();
+  r.mutable_table()->set_cushion_model(v1::CUSHION_MODEL_STRONGE_COMPLIANT);
+  (*r.mutable_table()->mutable_params())["cushion_poisson_ratio"] = 0.3;
+  job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().cushion_model, b::CushionModel::kStrongeCompliant);
+  EXPECT_EQ(job->table.model.params().cushion_poisson_ratio, 0.3);
+  (*r.mutable_table()->mutable_params())["cushion_poisson_ratio"] = 0.6;
+  EXPECT_THAT(ShotJobFromProto(r).status().message(),
+              ::testing::HasSubstr("cushion_poisson_ratio"));
 }
 
 TEST(BilliardsConvertTest, OtherPresetsTakeTheirGamesRack) {
