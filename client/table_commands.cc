@@ -23,6 +23,7 @@
 #include "client/cli.h"
 #include "client/game_text.h"
 #include "client/table_svg.h"
+#include "client/track_json.h"
 #include "sim/billiards/track_file.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
@@ -726,7 +727,7 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
     std::ifstream in(path, std::ios::binary);
     if (!in) return UsageError("table calibrate: cannot read '" + path + "'");
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    absl::StatusOr<billiards::TrackFile> file = billiards::ParseTrackCsv(text);
+    absl::StatusOr<billiards::TrackFile> file = ParseTrackText(text);
     if (!file.ok()) return UsageError(InvalidValue(path + ": " + std::string(file.status().message())));
     v1::RecordedShot* shot = request.add_shots();
     shot->set_name(std::filesystem::path(path).filename().string().substr(0, 64));

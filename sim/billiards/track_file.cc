@@ -48,15 +48,62 @@ std::string Quote(std::string_view s) {
 
 }  // namespace
 
+absl::Status TrackBuilder::Add(int line, double t, std::string_view id, double x, double y) {
+  if (++rows_ > kMaxTrackRows) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("line %d: at most %d rows", line, kMaxTrackRows));
+  }
+  const double v[3] = {t, x, y};
+  static constexpr const char* kWhat[3] = {"t", "x", "y"};
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(v[k]) || std::abs(v[k]) > 1e6) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "line %d: %s must be a finite number within 1e6, got %g", line, kWhat[k], v[k]));
+    }
+  }
+  if (id.empty()) {
+    return absl::InvalidArgumentError(absl::StrFormat("line %d: the ball's id is empty", line));
+  }
+  auto it = index_.find(id);
+  if (it == index_.end()) {
+    it = index_.emplace(std::string(id), static_cast<int>(out_.balls.size())).first;
+    out_.balls.emplace_back(id);
+    before_.emplace_back();
+    first_.emplace_back();
+  }
+  const int b = it->second;
+  const Eigen::Vector2d xy(x, y);
+  if (t <= 0.0) {
+    before_[static_cast<size_t>(b)] = xy;
+  } else {
+    out_.points.push_back(TrackPoint{.t_s = t, .ball = b, .xy = xy});
+    auto& f = first_[static_cast<size_t>(b)];
+    if (!f || t < f->first) f = std::make_pair(t, xy);
+  }
+  return absl::OkStatus();
+}
+
+absl::StatusOr<TrackFile> TrackBuilder::Finish() && {
+  if (out_.balls.empty()) return absl::InvalidArgumentError("the file has no rows");
+  std::stable_sort(out_.points.begin(), out_.points.end(),
+                   [](const TrackPoint& a, const TrackPoint& b) { return a.t_s < b.t_s; });
+  for (size_t b = 0; b < out_.balls.size(); ++b) {
+    out_.spots.push_back(before_[b] ? *before_[b] : first_[b]->second);
+  }
+  for (const TrackPoint& p : out_.points) {
+    if ((p.xy - out_.spots[static_cast<size_t>(p.ball)]).norm() > 0.01) {
+      out_.cue = p.ball;
+      break;
+    }
+  }
+  return std::move(out_);
+}
+
 absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text) {
-  TrackFile out;
+  TrackBuilder rows;
   // Column indices of t, ball, x, y once the header is read.
   int col[4] = {-1, -1, -1, -1};
   bool header = false;
-  int rows = 0;
-  std::map<std::string, int, std::less<>> index;
-  std::vector<std::optional<Eigen::Vector2d>> before;  // last spot with t <= 0
-  std::vector<std::optional<std::pair<double, Eigen::Vector2d>>> first;  // first tracked
   size_t pos = 0;
   for (int line_no = 1; pos <= text.size(); ++line_no) {
     const size_t nl = text.find('\n', pos);
@@ -88,10 +135,6 @@ absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text) {
       header = true;
       continue;
     }
-    if (++rows > kMaxTrackRows) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("line %d: at most %d rows", line_no, kMaxTrackRows));
-    }
     const int need = *std::max_element(col, col + 4) + 1;
     if (static_cast<int>(cells.size()) < need) {
       return absl::InvalidArgumentError(absl::StrFormat(
@@ -109,41 +152,13 @@ absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text) {
       }
       v[k] = *n;
     }
-    const std::string_view id = cells[static_cast<size_t>(col[1])];
-    if (id.empty()) {
-      return absl::InvalidArgumentError(absl::StrFormat("line %d: the ball's id is empty", line_no));
-    }
-    auto it = index.find(id);
-    if (it == index.end()) {
-      it = index.emplace(std::string(id), static_cast<int>(out.balls.size())).first;
-      out.balls.emplace_back(id);
-      before.emplace_back();
-      first.emplace_back();
-    }
-    const int b = it->second;
-    const Eigen::Vector2d xy(v[1], v[2]);
-    if (v[0] <= 0.0) {
-      before[static_cast<size_t>(b)] = xy;
-    } else {
-      out.points.push_back(TrackPoint{.t_s = v[0], .ball = b, .xy = xy});
-      auto& f = first[static_cast<size_t>(b)];
-      if (!f || v[0] < f->first) f = std::make_pair(v[0], xy);
+    if (absl::Status s = rows.Add(line_no, v[0], cells[static_cast<size_t>(col[1])], v[1], v[2]);
+        !s.ok()) {
+      return s;
     }
   }
   if (!header) return absl::InvalidArgumentError("the file has no header row (t, ball, x, y)");
-  if (out.balls.empty()) return absl::InvalidArgumentError("the file has no rows");
-  std::stable_sort(out.points.begin(), out.points.end(),
-                   [](const TrackPoint& a, const TrackPoint& b) { return a.t_s < b.t_s; });
-  for (size_t b = 0; b < out.balls.size(); ++b) {
-    out.spots.push_back(before[b] ? *before[b] : first[b]->second);
-  }
-  for (const TrackPoint& p : out.points) {
-    if ((p.xy - out.spots[static_cast<size_t>(p.ball)]).norm() > 0.01) {
-      out.cue = p.ball;
-      break;
-    }
-  }
-  return out;
+  return std::move(rows).Finish();
 }
 
 }  // namespace sportsim::billiards

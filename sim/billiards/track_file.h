@@ -13,11 +13,16 @@
 #ifndef SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
 #define SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
 
+#include <functional>
+#include <map>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "Eigen/Core"
+#include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "sim/billiards/calibrate.h"
 
@@ -32,6 +37,24 @@ struct TrackFile {
 
 /// Most rows a track file may hold.
 inline constexpr int kMaxTrackRows = 1000000;
+
+/// Gathers a track file's rows, in whatever form they come (CSV here; JSON lines in the CLI,
+/// client/track_json.h): each a ball's centre at a time, meaning what a CSV row means.
+class TrackBuilder {
+ public:
+  /// Adds one row; `line` names it in errors. InvalidArgument for a t, x or y that is not a
+  /// finite number within 1e6, an empty id, or more than kMaxTrackRows rows.
+  absl::Status Add(int line, double t, std::string_view id, double x, double y);
+  /// The file: its spots, struck ball and points in time order. InvalidArgument without rows.
+  absl::StatusOr<TrackFile> Finish() &&;
+
+ private:
+  TrackFile out_;
+  int rows_ = 0;
+  std::map<std::string, int, std::less<>> index_;
+  std::vector<std::optional<Eigen::Vector2d>> before_;                  // last spot, t <= 0
+  std::vector<std::optional<std::pair<double, Eigen::Vector2d>>> first_;  // first tracked
+};
 
 /// Parses a track file. InvalidArgument naming the line and the column for a missing or
 /// malformed header, a row with too few cells, a number that does not parse or is not finite,

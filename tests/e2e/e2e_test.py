@@ -1594,6 +1594,35 @@ class CalibrateAgainstServer(unittest.TestCase):
             self.assertIn(key, report)
         self.assertIn("calibrate: 100%", r.stderr)  # progress on stderr
 
+    def test_json_lines_track_files_calibrate_as_their_csv(self):
+        # A recording's first 0.3 s as CSV and as JSON lines (as a tracker logging a detection
+        # a line writes them): the strikes fitted and the report are the same, bit for bit.
+        with open(self.files[0]) as f:
+            rows = [row for row in csv.DictReader(f) if float(row["t_s"]) <= 0.3]
+        short_csv = os.path.join(self.dir.name, "short.csv")
+        short_jsonl = os.path.join(self.dir.name, "short.jsonl")
+        with open(short_csv, "w") as f:
+            f.write("t,ball,x,y\n")
+            for row in rows:
+                f.write("%s,%s,%s,%s\n" % (row["t_s"], row["id"], row["x_m"], row["y_m"]))
+        with open(short_jsonl, "w") as f:
+            f.write("# exported\n")
+            for row in rows:
+                f.write(json.dumps({"t": float(row["t_s"]), "ball": row["id"],
+                                    "x": float(row["x_m"]), "y": float(row["y_m"]),
+                                    "state": row["state"]}) + "\n")
+        runs = []
+        for path in (short_csv, short_jsonl):
+            r = cli(self.server.address, "--format", "json", "--timeout", "300s", "table",
+                    "calibrate", path, "--table", "carom")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            report = json.loads(r.stdout)
+            self.assertEqual(len(report["shots"]), 1)
+            del report["shots"][0]["name"]
+            del report["cpu_s"]
+            runs.append(report)
+        self.assertEqual(runs[0], runs[1])
+
     def test_calibrate_text_names_the_flags_to_use(self):
         r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
                 "--fit", "mu_roll=0.002:0.015", "--heldout", "1")

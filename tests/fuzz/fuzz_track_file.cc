@@ -1,4 +1,5 @@
-// Track files (sim/billiards/track_file.h): text bytes -> ParseTrackCsv. Errors are short, name
+// Track files (sim/billiards/track_file.h, client/track_json.h): text bytes -> ParseTrackText,
+// CSV or JSON lines by the first line that counts. Errors are short, name
 // a line (or the header) and have no raw control characters; an accepted file has a spot per
 // ball, finite points after the strike in time order with valid ball indices, and a struck
 // ball (if any) that is one of them.
@@ -6,6 +7,7 @@
 #include <cstdint>
 #include <string_view>
 
+#include "client/track_json.h"
 #include "sim/billiards/track_file.h"
 #include "tests/fuzz/fuzz_util.h"
 
@@ -13,9 +15,9 @@ using namespace sportsim;
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  absl::StatusOr<billiards::TrackFile> f = billiards::ParseTrackCsv(text);
+  absl::StatusOr<billiards::TrackFile> f = cli::ParseTrackText(text);
   if (!f.ok()) {
-    fuzz::CheckMessage("ParseTrackCsv", f.status());
+    fuzz::CheckMessage("ParseTrackText", f.status());
     FUZZ_CHECK(f.status().code() == absl::StatusCode::kInvalidArgument, "code %s",
                f.status().ToString().c_str());
     return 0;
