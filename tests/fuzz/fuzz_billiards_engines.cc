@@ -1,6 +1,7 @@
 // The billiards engines on small random scenes: 2-6 balls placed where ValidateLayout accepts
 // them (anywhere on the cloth, some frozen against another ball) on a pool-9ft, snooker or carom
-// table, a cue strike decoded from the bytes, then both engines (event and stepped), advanced in
+// table with Han's cushions, or a pool-9ft or carom one with Stronge's compliant cushions (a
+// stiff rubber on the pool table), a cue strike decoded from the bytes, then both engines (event and stepped), advanced in
 // chunks (a server's ticks) under a small time budget and event cap. Invariants:
 // - every ball's position, velocity, spin and orientation finite after every chunk;
 // - events in time order, inside the chunk that reported them, with valid indices;
@@ -193,6 +194,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const std::vector<b::TableModel> models = [] {
     std::vector<b::TableModel> m;
     for (const char* p : kPresets) m.push_back(*b::TableModel::Create(*b::MakeTablePreset(p)));
+    for (const char* p : {"pool-9ft", "carom"}) {
+      b::TableSpec s = *b::MakeTablePreset(p);
+      s.params.cushion_model = b::CushionModel::kStrongeCompliant;
+      if (s.name == "pool-9ft") s.params.cushion_poisson_ratio = 0.0;
+      m.push_back(*b::TableModel::Create(s));
+    }
     return m;
   }();
   FuzzedDataProvider in(data, size);
