@@ -6,8 +6,8 @@
 // at 7R/5, a 52.5 mm ball), integrated with 5000 impulse steps, over the range where they found
 // it valid (normal speeds up to 2.5 m/s): approach angles 10-90 deg to the rail, speeds 0.5-2.5
 // m/s, stun or natural roll, no side spin or half the speed's worth (w_z R = +-V/2). What each
-// model gives just after the impact is compared with it: the rebound angle to the rail (deg)
-// and the rebound speed (relative).
+// model gives just after the impact is compared with it: the rebound angle to the rail (deg),
+// the rebound speed (relative) and the spin (R w, over the approach speed; not fitted).
 //
 // Each of Han's and Stronge's models is scored with the snooker preset's constants (restitution
 // 0.85, friction 0.2) and with its restitution and friction fitted to the curves (least squares
@@ -16,7 +16,8 @@
 // shows its integration error. CPU: the median over 5 passes of the calling thread's CPU per
 // impact.
 //
-// CSV on stdout: model,constants,e,f,angle_rms_deg,angle_max_deg,speed_rms_pct,cpu_ns
+// CSV on stdout: model,constants,e,f,angle_rms_deg,angle_max_deg,speed_rms_pct,spin_rms_pct,
+// cpu_ns
 // Usage: billiards_cushion_study [--quick]
 #include <algorithm>
 #include <cmath>
@@ -64,37 +65,39 @@ std::vector<Approach> Approaches(double radius) {
 }
 
 // The ball just after the impact into the cushion whose normal into the table is -y.
-Eigen::Vector3d Rebound(const TableModel& model, const Approach& a) {
+Ball Rebound(const TableModel& model, const Approach& a) {
   Ball b;
-  b.id = "b";
   b.r = Eigen::Vector3d(0.0, 0.0, model.radius());
   b.v = a.v;
   b.w = a.w;
   CollideCushion(model, Eigen::Vector2d(0.0, -1.0), &b);
-  return b.v;
+  return b;
 }
 
 double AngleDeg(const Eigen::Vector3d& v) { return std::atan2(-v.y(), v.x()) * 180.0 / M_PI; }
 
 struct Score {
-  double angle_rms_deg = 0, angle_max_deg = 0, speed_rms = 0, loss = 0;
+  double angle_rms_deg = 0, angle_max_deg = 0, speed_rms = 0, spin_rms = 0, loss = 0;
 };
 
 Score Compare(const TableModel& model, const std::vector<Approach>& in,
-              const std::vector<Eigen::Vector3d>& ref) {
+              const std::vector<Ball>& ref) {
   Score s;
   for (size_t i = 0; i < in.size(); ++i) {
-    const Eigen::Vector3d v = Rebound(model, in[i]);
-    const double da = AngleDeg(v) - AngleDeg(ref[i]);
-    const double ds = v.norm() / ref[i].norm() - 1.0;
+    const Ball b = Rebound(model, in[i]);
+    const double da = AngleDeg(b.v) - AngleDeg(ref[i].v);
+    const double ds = b.v.norm() / ref[i].v.norm() - 1.0;
+    const double dw = model.radius() * (b.w - ref[i].w).norm() / in[i].v.norm();
     s.angle_rms_deg += da * da;
     s.angle_max_deg = std::max(s.angle_max_deg, std::abs(da));
     s.speed_rms += ds * ds;
+    s.spin_rms += dw * dw;
   }
   const double n = static_cast<double>(in.size());
   s.loss = s.angle_rms_deg * (M_PI / 180.0) * (M_PI / 180.0) + s.speed_rms;
   s.angle_rms_deg = std::sqrt(s.angle_rms_deg / n);
   s.speed_rms = std::sqrt(s.speed_rms / n);
+  s.spin_rms = std::sqrt(s.spin_rms / n);
   return s;
 }
 
@@ -112,7 +115,7 @@ double CpuNsPerImpact(const TableModel& model, const std::vector<Approach>& in) 
     const double t0 = ThreadCpuSeconds();
     double sink = 0.0;
     for (int rep = 0; rep < 20; ++rep) {
-      for (const Approach& a : in) sink += Rebound(model, a).x();
+      for (const Approach& a : in) sink += Rebound(model, a).v.x();
     }
     passes.push_back((ThreadCpuSeconds() - t0) / (20.0 * in.size()));
     if (sink == 12345.678) std::printf("#\n");  // keeps the work
@@ -122,21 +125,21 @@ double CpuNsPerImpact(const TableModel& model, const std::vector<Approach>& in) 
 }
 
 void Report(const std::string& model_name, const std::string& constants, const TableModel& model,
-            const std::vector<Approach>& in, const std::vector<Eigen::Vector3d>& ref) {
+            const std::vector<Approach>& in, const std::vector<Ball>& ref) {
   const Score s = Compare(model, in, ref);
   const PhysicsParams& p = model.params();
   const bool mathavan = p.cushion_model == CushionModel::kMathavan2010;
-  std::printf("%s,%s,%.3f,%.3f,%.2f,%.2f,%.1f,%.0f\n", model_name.c_str(), constants.c_str(),
-              mathavan ? p.e_cushion_mathavan : p.e_cushion,
+  std::printf("%s,%s,%.3f,%.3f,%.2f,%.2f,%.1f,%.1f,%.0f\n", model_name.c_str(),
+              constants.c_str(), mathavan ? p.e_cushion_mathavan : p.e_cushion,
               mathavan ? p.f_cushion_mathavan : p.f_cushion, s.angle_rms_deg, s.angle_max_deg,
-              100.0 * s.speed_rms, CpuNsPerImpact(model, in));
+              100.0 * s.speed_rms, 100.0 * s.spin_rms, CpuNsPerImpact(model, in));
   std::fflush(stdout);
 }
 
 // Restitution and friction by least squares on a grid over [0.5, 1] x [0, 0.4], refined twice
 // around the best point.
 TableModel Fit(const TableSpec& spec, CushionModel cm, double poisson, bool quick,
-               const std::vector<Approach>& in, const std::vector<Eigen::Vector3d>& ref) {
+               const std::vector<Approach>& in, const std::vector<Ball>& ref) {
   double e_lo = 0.5, e_hi = 1.0, f_lo = 0.0, f_hi = 0.4;
   double best_e = 0.85, best_f = 0.2;
   const int n = quick ? 6 : 26;
@@ -184,10 +187,10 @@ int main(int argc, char** argv) {
   reference.params.cushion_impulse_steps = 5000;
   const TableModel truth = *TableModel::Create(reference);
   const std::vector<Approach> in = Approaches(truth.radius());
-  std::vector<Eigen::Vector3d> ref;
+  std::vector<Ball> ref;
   for (const Approach& a : in) ref.push_back(Rebound(truth, a));
 
-  std::printf("model,constants,e,f,angle_rms_deg,angle_max_deg,speed_rms_pct,cpu_ns\n");
+  std::printf("model,constants,e,f,angle_rms_deg,angle_max_deg,speed_rms_pct,spin_rms_pct,cpu_ns\n");
   TableSpec mathavan500 = reference;
   mathavan500.params.cushion_impulse_steps = 500;
   Report("mathavan2010", "500 steps", *TableModel::Create(mathavan500), in, ref);
