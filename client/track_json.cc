@@ -7,18 +7,10 @@
 #include <string>
 
 #include "absl/strings/str_format.h"
+#include "sim/core/quote.h"
 
 namespace sportsim::cli {
 namespace {
-
-// A short, printable quote of a text for an error message.
-std::string Quote(std::string_view s, size_t n) {
-  std::string q(s.substr(0, n));
-  for (char& c : q) {
-    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
-  }
-  return q + (s.size() > n ? "..." : "");
-}
 
 // The first of a key's names that the object has, or null.
 const google::protobuf::Value* Field(const google::protobuf::Struct& o, const char* a,
@@ -47,7 +39,7 @@ absl::StatusOr<billiards::TrackFile> ParseTrackJsonLines(std::string_view text) 
     const auto parsed = google::protobuf::util::JsonStringToMessage(std::string(line), &o);
     if (!parsed.ok()) {
       return absl::InvalidArgumentError(absl::StrFormat(
-          "line %d: not a JSON object (%s)", line_no, Quote(std::string(parsed.message()), 80)));
+          "line %d: not a JSON object: %s", line_no, QuoteInput(std::string(parsed.message()), 80)));
     }
     static constexpr const char* kNames[4][2] = {{"t", "t_s"}, {"ball", "id"}, {"x", "x_m"},
                                                  {"y", "y_m"}};

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "absl/strings/str_format.h"
+#include "sim/core/quote.h"
 
 namespace sportsim::billiards {
 namespace {
@@ -35,15 +36,6 @@ std::optional<double> Number(std::string_view s) {
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
   if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
   return v;
-}
-
-// A short quote of a cell for an error message.
-std::string Quote(std::string_view s) {
-  std::string q(s.substr(0, 24));
-  for (char& c : q) {
-    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
-  }
-  return "\"" + q + (s.size() > 24 ? "...\"" : "\"");
 }
 
 }  // namespace
@@ -148,7 +140,7 @@ absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text) {
       const std::optional<double> n = Number(cell);
       if (!n || std::abs(*n) > 1e6) {
         return absl::InvalidArgumentError(absl::StrFormat(
-            "line %d: %s must be a finite number within 1e6, got %s", line_no, kWhat[k], Quote(cell)));
+            "line %d: %s must be a finite number within 1e6, got %s", line_no, kWhat[k], QuoteInput(cell)));
       }
       v[k] = *n;
     }

@@ -15,6 +15,7 @@
 #include "absl/strings/str_split.h"
 #include "absl/strings/strip.h"
 #include "sim/core/check.h"
+#include "sim/core/quote.h"
 
 namespace sportsim::golf {
 
@@ -60,16 +61,8 @@ std::string JoinTags() {
   return out;
 }
 
-// A user's token in an error: printable, at most 24 bytes.
-std::string Q(std::string_view s) {
-  std::string out = "'";
-  for (size_t i = 0; i < s.size() && i < 24; ++i) {
-    const unsigned char c = static_cast<unsigned char>(s[i]);
-    out += (c >= 0x20 && c < 0x7f) ? static_cast<char>(c) : '?';
-  }
-  if (s.size() > 24) out += "...";
-  return out + "'";
-}
+// A user's token in an error: printable, at most 24 bytes, in single quotes.
+std::string Q(std::string_view s) { return QuoteInput(s, 24, '\''); }
 
 // Even-odd crossing test.
 bool InPolygon(const std::vector<Vector2d>& poly, double x, double y) {
