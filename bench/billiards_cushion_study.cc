@@ -113,12 +113,11 @@ double CpuNsPerImpact(const TableModel& model, const std::vector<Approach>& in) 
   std::vector<double> passes;
   for (int pass = 0; pass < 5; ++pass) {
     const double t0 = ThreadCpuSeconds();
-    double sink = 0.0;
+    volatile double sink = 0.0;  // keeps the impacts from being optimised away
     for (int rep = 0; rep < 20; ++rep) {
-      for (const Approach& a : in) sink += Rebound(model, a).v.x();
+      for (const Approach& a : in) sink = sink + Rebound(model, a).v.x();
     }
     passes.push_back((ThreadCpuSeconds() - t0) / (20.0 * in.size()));
-    if (sink == 12345.678) std::printf("#\n");  // keeps the work
   }
   std::sort(passes.begin(), passes.end());
   return 1e9 * passes[passes.size() / 2];

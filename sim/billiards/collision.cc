@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "sim/billiards/cloth.h"
+#include "sim/core/root_find.h"
+#include "sim/core/units.h"
 
 namespace sportsim::billiards {
 
@@ -259,7 +262,7 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
 // impulse, while the interface slip v - u' keeps the sign s.
 namespace {
 
-constexpr double kHalfPi = 1.5707963267948966;
+constexpr double kHalfPi = 0.5 * kPi;
 
 class CompliantContact {
  public:
@@ -318,24 +321,24 @@ class CompliantContact {
 
   // The first tau in (a, end] where f turns negative (f(a) is about zero or positive); end when
   // it does not. Each of compression and restitution (where the force's law changes) is
-  // sampled at `samples` points, and a sign change refined by bisection to rounding. One
-  // sample a phase suffices where f is monotone in each.
+  // sampled at `samples` points, and a sign change refined to rounding by FindBracketedRoot.
+  // One sample a phase suffices where f is monotone in each.
   template <typename F>
   double FirstDrop(double a, int samples, F f) const {
     double lo = a;
+    std::optional<double> f_lo;  // f at lo once computed (at a, only when it is needed)
     auto step = [&](double from, double to) -> bool {
       for (int k = 1; k <= samples; ++k) {
         const double x = k == samples ? to : from + (to - from) * k / samples;
-        if (f(x) < 0.0) {
-          double hi = x;
-          for (int i = 0; i < 200 && hi - lo > 1e-15 * (1.0 + hi); ++i) {
-            const double mid = 0.5 * (lo + hi);
-            (f(mid) < 0.0 ? hi : lo) = mid;
-          }
-          lo = hi;
+        const double fx = f(x);
+        if (fx < 0.0) {
+          // At a phase's start f is zero in exact arithmetic: rounding below it is zero.
+          const double fa = f_lo.has_value() ? *f_lo : std::max(0.0, f(lo));
+          lo = FindBracketedRoot(f, lo, x, fa, fx, 1e-15 * (1.0 + x));
           return true;
         }
         lo = x;
+        f_lo = fx;
       }
       return false;
     };
@@ -391,9 +394,10 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
     const double slip = st.norm();
     if (slip > 0.0) {
       double pt = std::min(p.f_cushion * jn, 2.0 * m * slip / 7.0);
-      const double approach = -ball->v.dot(n);
-      if (p.cushion_model == CushionModel::kStrongeCompliant && approach > 0.0) {
-        // The same contact as springs: the slip after, over the approach speed along n.
+      if (p.cushion_model == CushionModel::kStrongeCompliant && jn > 0.0) {
+        // The same contact as springs: the slip after, over the approach speed along n
+        // (jn / ((1 + e) m), positive: the ball moves into the cushion).
+        const double approach = jn / ((1.0 + e) * m);
         const double after = CompliantTangentialRebound(
             slip / approach, e, p.f_cushion, 3.5, StrongeFrequencyRatio(p.cushion_poisson_ratio));
         pt = (slip - after * approach) * m / 3.5;
