@@ -7,10 +7,16 @@
 //    0.14, their model) and heated-cloth constants (rolling resistance 0.006, sliding 0.2,
 //    spin-down 10 rad/s^2), random layouts and strikes, tracked at 50 Hz with 1 mm Gaussian
 //    noise like a camera tracker. What a model loses here is model error plus noise.
-//  - --recordings DIR: every *.csv track file in DIR (sim/billiards/track_file.h: t, ball, x,
-//    y, as `shot simulate --format csv` writes), on the preset --preset (default carom). Obtain
-//    recorded shots from a tracker of your own table or a public set (docs/billiards.md);
-//    nothing third-party is committed.
+//  - --recordings PATH: a track file or a shot set (client/track_json.h: CSV or JSON lines of
+//    t, ball, x, y, as `shot simulate --format csv` writes; a JSON array of many shots; or a
+//    match tracker's export), or
+//    a directory of them (*.csv, *.jsonl, *.json), on the preset --preset (default carom), in
+//    the frame --track-origin centre|corner and --track-scale S (metres per unit) say, at most
+//    --recorded-shots N of them (spread evenly through the set). Obtain recorded shots from a
+//    tracker of your own table or a public set (docs/billiards.md); nothing third-party is
+//    committed. --no-synthetic skips the synthetic recordings; --write-set FILE writes them as
+//    a shot set, in millimetres from a corner of the table (what --track-origin corner
+//    --track-scale 0.001 reads back), to try the importer on shots whose truth is known.
 //
 // For each model (han, mathavan2010, stronge), with the preset's constants, with its rolling resistance
 // alone fitted, and calibrated (its cloth and cushion constants fitted), each fit on the first
@@ -23,7 +29,9 @@
 //  - cpu: the median thread CPU of one shot's simulation (its strike as fitted).
 // CSV on stdout: source,model,constants,fit_mm,predict_final_mm,predict_rails,cpu_us,shots
 //
-// Usage: billiards_calibration_study [--quick] [--shots N] [--recordings DIR] [--preset P]
+// Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
+//          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
+//          [--write-set FILE]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -35,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "client/track_json.h"
 #include "sim/billiards/calibrate.h"
 #include "sim/billiards/shot.h"
 #include "sim/billiards/track_file.h"
@@ -93,38 +102,95 @@ std::vector<Recording> Synthetic(int n, uint64_t seed) {
   return out;
 }
 
-std::vector<Recording> FromDirectory(const std::string& dir, const TableModel& model) {
+// The recorded shots at `path` (a file, or a directory of them), at most `max_shots` of them
+// spread evenly through the whole; unusable shots are skipped with a note on stderr.
+std::vector<Recording> FromPath(const std::string& path, const TableModel& model,
+                                const TrackFrame& frame, int max_shots) {
   std::vector<std::filesystem::path> files;
-  for (const auto& e : std::filesystem::directory_iterator(dir)) {
-    if (e.path().extension() == ".csv") files.push_back(e.path());
+  if (std::filesystem::is_directory(path)) {
+    for (const auto& e : std::filesystem::directory_iterator(path)) {
+      const std::string ext = e.path().extension().string();
+      if (ext == ".csv" || ext == ".jsonl" || ext == ".json") files.push_back(e.path());
+    }
+    std::sort(files.begin(), files.end());
+  } else {
+    files.push_back(path);
   }
-  std::sort(files.begin(), files.end());
   std::vector<Recording> out;
-  for (const auto& path : files) {
-    std::ifstream in(path);
+  for (const auto& file : files) {
+    std::ifstream in(file);
     std::stringstream text;
     text << in.rdbuf();
-    absl::StatusOr<TrackFile> f = ParseTrackCsv(text.str());
-    if (!f.ok() || f->cue < 0) {
-      std::fprintf(stderr, "%s: skipped: %s\n", path.c_str(),
-                   f.ok() ? "no ball moves" : std::string(f.status().message()).c_str());
+    absl::StatusOr<std::vector<cli::NamedTrack>> tracks = cli::ParseTracks(text.str(), frame);
+    if (!tracks.ok()) {
+      std::fprintf(stderr, "%s: skipped: %s\n", file.c_str(), std::string(tracks.status().message()).c_str());
       continue;
     }
-    Recording r;
-    r.name = path.filename().string();
-    for (size_t b = 0; b < f->balls.size(); ++b) {
-      r.initial.balls.push_back(Ball{.id = f->balls[b],
-                                     .r = Eigen::Vector3d(f->spots[b].x(), f->spots[b].y(), model.radius())});
+    for (const cli::NamedTrack& t : *tracks) {
+      Recording r;
+      r.name = file.filename().string() + (t.name.empty() ? "" : "#" + t.name);
+      if (t.file.cue < 0) {
+        std::fprintf(stderr, "%s: skipped: no ball moves\n", r.name.c_str());
+        continue;
+      }
+      for (size_t b = 0; b < t.file.balls.size(); ++b) {
+        r.initial.balls.push_back(Ball{.id = t.file.balls[b],
+                                       .r = Eigen::Vector3d(t.file.spots[b].x(), t.file.spots[b].y(),
+                                                            model.radius())});
+      }
+      r.cue = t.file.cue;
+      r.track = t.file.points;
+      if (absl::Status s = ValidateRecording(model, r); !s.ok()) {
+        std::fprintf(stderr, "%s: skipped: %s\n", r.name.c_str(), std::string(s.message()).c_str());
+        continue;
+      }
+      out.push_back(std::move(r));
     }
-    r.cue = f->cue;
-    r.track = f->points;
-    if (absl::Status s = ValidateRecording(model, r); !s.ok()) {
-      std::fprintf(stderr, "%s: skipped: %s\n", path.c_str(), std::string(s.message()).c_str());
-      continue;
+  }
+  if (max_shots > 0 && static_cast<int>(out.size()) > max_shots) {
+    std::vector<Recording> some;
+    for (int i = 0; i < max_shots; ++i) {
+      some.push_back(std::move(out[static_cast<size_t>(i) * out.size() / static_cast<size_t>(max_shots)]));
     }
-    out.push_back(std::move(r));
+    out = std::move(some);
   }
   return out;
+}
+
+// Writes recordings as a shot set (client/track_json.h) in millimetres from the corner at
+// (-length/2, -width/2): where each ball stood at t = 0, then its track.
+bool WriteShotSet(const std::string& path, const TableSpec& spec, const std::vector<Recording>& recs) {
+  std::ofstream out(path);
+  const Eigen::Vector2d corner(-spec.length_m / 2, -spec.width_m / 2);
+  out << "[";
+  for (size_t i = 0; i < recs.size(); ++i) {
+    const Recording& r = recs[i];
+    out << (i ? ",\n " : "") << "{\"id\": \"" << r.name << "\", \"balls\": {";
+    for (size_t b = 0; b < r.initial.balls.size(); ++b) {
+      std::string t = "0", x, y;
+      auto add = [&](const Eigen::Vector2d& xy) {
+        const Eigen::Vector2d mm = 1e3 * (xy - corner);
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.17g", mm.x());
+        x += (x.empty() ? "" : ", ") + std::string(buf);
+        std::snprintf(buf, sizeof buf, "%.17g", mm.y());
+        y += (y.empty() ? "" : ", ") + std::string(buf);
+      };
+      add(r.initial.balls[b].r.head<2>());
+      for (const TrackPoint& p : r.track) {
+        if (p.ball != static_cast<int>(b)) continue;
+        char buf[32];
+        std::snprintf(buf, sizeof buf, ", %.17g", p.t_s);
+        t += buf;
+        add(p.xy);
+      }
+      out << (b ? ", " : "") << "\"" << r.initial.balls[b].id << "\": {\"t\": [" << t
+          << "], \"x\": [" << x << "], \"y\": [" << y << "]}";
+    }
+    out << "}}";
+  }
+  out << "]\n";
+  return static_cast<bool>(out);
 }
 
 // The cushions met by the struck ball, in order (the first three), and where it rests.
@@ -227,35 +293,64 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
 
 int main(int argc, char** argv) {
   using namespace sportsim::billiards;
-  int shots = 24;
-  std::string dir, preset = "carom";
+  int shots = 24, recorded_shots = 0;
+  bool synthetic = true;
+  std::string path, preset = "carom", origin = "centre", write_set;
+  double scale = 1.0;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
       shots = 4;
     } else if (!std::strcmp(argv[i], "--shots") && i + 1 < argc) {
       shots = std::max(2, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--no-synthetic")) {
+      synthetic = false;
     } else if (!std::strcmp(argv[i], "--recordings") && i + 1 < argc) {
-      dir = argv[++i];
+      path = argv[++i];
     } else if (!std::strcmp(argv[i], "--preset") && i + 1 < argc) {
       preset = argv[++i];
+    } else if (!std::strcmp(argv[i], "--track-origin") && i + 1 < argc) {
+      origin = argv[++i];
+    } else if (!std::strcmp(argv[i], "--track-scale") && i + 1 < argc) {
+      scale = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--write-set") && i + 1 < argc) {
+      write_set = argv[++i];
+    } else if (!std::strcmp(argv[i], "--recorded-shots") && i + 1 < argc) {
+      recorded_shots = std::max(2, std::atoi(argv[++i]));
     } else {
       std::fprintf(stderr,
-                   "usage: billiards_calibration_study [--quick] [--shots N] [--recordings DIR] "
-                   "[--preset P]\n");
+                   "usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] "
+                   "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
+                   "[--track-scale S] [--recorded-shots N] [--write-set FILE]\n");
       return 2;
     }
   }
   std::printf("source,model,constants,fit_mm,predict_final_mm,predict_rails,cpu_us,shots\n");
-  Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33));
-  if (!dir.empty()) {
+  if (!write_set.empty() && !WriteShotSet(write_set, *MakeTablePreset("carom"), Synthetic(shots, 33))) {
+    std::fprintf(stderr, "%s: cannot write\n", write_set.c_str());
+    return 1;
+  }
+  if (synthetic) Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33));
+  if (!path.empty()) {
     absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);
     if (!spec.ok()) {
       std::fprintf(stderr, "--preset: %s\n", std::string(spec.status().message()).c_str());
       return 2;
     }
-    const std::vector<Recording> recs = FromDirectory(dir, *TableModel::Create(*spec));
+    TrackFrame frame{.scale = scale, .table_m = Eigen::Vector2d(spec->length_m, spec->width_m)};
+    if (origin == "corner") {
+      frame.origin = Eigen::Vector2d(-spec->length_m / 2, -spec->width_m / 2);
+    } else if (origin != "centre") {
+      std::fprintf(stderr, "--track-origin: centre or corner\n");
+      return 2;
+    }
+    if (absl::Status s = ValidateTrackFrame(frame); !s.ok()) {
+      std::fprintf(stderr, "--track-scale: %s\n", std::string(s.message()).c_str());
+      return 2;
+    }
+    const std::vector<Recording> recs =
+        FromPath(path, *TableModel::Create(*spec), frame, recorded_shots);
     if (recs.size() < 2) {
-      std::fprintf(stderr, "%s: fewer than two usable recordings\n", dir.c_str());
+      std::fprintf(stderr, "%s: fewer than two usable recordings\n", path.c_str());
       return 1;
     }
     Study("recorded", *spec, recs);

@@ -252,20 +252,25 @@ std::vector<CommandSpec> MakeSpecs() {
         {"frame", "the frame conceded (default: the table's frame, read first)"}}},
       {"table", "record", "ID", "a ruled game's match record", NoFlags()},
       {"table", "calibrate", "FILE...",
-       "fit a table's parameters and each shot's cue inputs to recorded shots (CSV track "
-       "files: t, ball, x, y; `shot simulate --format csv` writes one); progress on stderr",
+       "fit a table's parameters and each shot's cue inputs to recorded shots (track files of "
+       "t, ball, x, y as CSV or JSON lines, `shot simulate --format csv` writes one; or shot "
+       "sets, a JSON array of many shots); progress on stderr",
        Join({{{"table", "table preset to start from (default pool-9ft)"},
               {"param", "a starting parameter (repeatable)"},
               {"cushion_model", "han (default), mathavan2010, stronge or mirror"}},
              SolverFlags(),
              {{"fit", "parameters to fit, NAME or NAME=LO:HI, comma separated (default bounds: "
                       "the published ranges; none: the strikes only)"},
-              {"heldout", "files (0-based) scored but not fitted on, comma separated"},
+              {"heldout", "shots (0-based, in the files' order) scored but not fitted on, comma "
+                          "separated"},
               {"window", "held-out shots' strikes from their first seconds only, (0, 3600] s"},
               {"max_iterations", "Levenberg-Marquardt iterations, [1, 1000] (default 60)"},
               {"max_simulations", "simulations in all, [1, 1e9] (default 2000000)"},
               {"cue_ball", "the struck ball in every file (default: the first to move a cm)"},
-              {"fit_elevation", "fit the cue's elevation too (default level)"}}})},
+              {"fit_elevation", "fit the cue's elevation too (default level)"},
+              {"track_origin", "where the files' (0, 0) is: centre (default, the table frame) "
+                               "or corner (of the playing area, x along its length)"},
+              {"track_scale", "metres per unit of the files' coordinates (default 1)"}}})},
       {"table", "watch", "ID", "the table's snapshots as they come",
        {{"rate", "snapshots per second at most while balls move, [0, 1000] (default 30); 0, "
                  "or above the tick rate: every tick"},

@@ -24,6 +24,7 @@
 #include "client/game_text.h"
 #include "client/table_svg.h"
 #include "client/track_json.h"
+#include "sim/billiards/model.h"
 #include "sim/billiards/track_file.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 
@@ -71,7 +72,8 @@ ABSL_FLAG(std::string, choice, "", "table decide: one of the pending decision's 
 ABSL_FLAG(std::vector<std::string>, fit, {},
           "table calibrate: the parameters to fit, NAME or NAME=LO:HI, comma separated");
 ABSL_FLAG(std::vector<std::string>, heldout, {},
-          "table calibrate: the files held out of the fit (0-based indices), comma separated");
+          "table calibrate: the shots held out of the fit (0-based, in the files' order), comma "
+          "separated");
 ABSL_FLAG(std::optional<double>, window, std::nullopt,
           "table calibrate: held-out shots' strikes from their first seconds only");
 ABSL_FLAG(std::optional<int>, max_iterations, std::nullopt,
@@ -81,6 +83,11 @@ ABSL_FLAG(std::optional<int64_t>, max_simulations, std::nullopt,
 ABSL_FLAG(std::string, cue_ball, "",
           "table calibrate: the struck ball in every file (default: the first ball to move)");
 ABSL_FLAG(bool, fit_elevation, false, "table calibrate: fit the cue's elevation too");
+ABSL_FLAG(std::string, track_origin, "centre",
+          "table calibrate: where the files' (0, 0) is: centre (the table frame) or corner (a "
+          "corner of the playing area, x along its length)");
+ABSL_FLAG(std::optional<double>, track_scale, std::nullopt,
+          "table calibrate: metres per unit of the files' coordinates, (0, 1e6] (default 1)");
 
 namespace sportsim::cli {
 namespace {
@@ -692,11 +699,38 @@ std::optional<std::string> CheckGameFlags(std::string_view command, std::string_
 
 namespace {
 
+// The frame of the calibration's track files (--track-origin, --track-scale) on `preset`'s
+// table; an error message for a bad flag.
+absl::StatusOr<billiards::TrackFrame> TrackFrameFromFlags(const std::string& preset) {
+  billiards::TrackFrame frame;
+  if (const auto s = absl::GetFlag(FLAGS_track_scale)) frame.scale = *s;
+  // The playing area, for a corner origin and for files measuring in fractions of it (an
+  // unknown preset is left to the server to refuse).
+  absl::StatusOr<billiards::TableSpec> spec =
+      billiards::MakeTablePreset(preset.empty() ? "pool-9ft" : preset);
+  if (spec.ok()) frame.table_m = Eigen::Vector2d(spec->length_m, spec->width_m);
+  const std::string origin = absl::GetFlag(FLAGS_track_origin);
+  if (origin == "corner") {
+    if (!spec.ok()) return absl::InvalidArgumentError("--table: " + std::string(spec.status().message()));
+    frame.origin = -frame.table_m / 2;
+  } else if (origin != "centre") {
+    return absl::InvalidArgumentError("--track-origin: centre or corner, got '" + origin + "'");
+  }
+  if (absl::Status s = billiards::ValidateTrackFrame(frame); !s.ok()) {
+    return absl::InvalidArgumentError("--track-scale: " + std::string(s.message()));
+  }
+  return frame;
+}
+
 // table calibrate FILE...: the files' recorded shots, the fit's progress on stderr, the report.
 int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>& args) {
-  if (args.empty()) return UsageError("table calibrate needs one or more track files (CSV)");
+  if (args.empty()) {
+    return UsageError("table calibrate needs one or more track files (CSV, JSON lines or a shot set)");
+  }
   v1::CalibrateTableRequest request;
   if (auto bad = BuildSetup(request.mutable_table())) return UsageError(*bad);
+  absl::StatusOr<billiards::TrackFrame> frame = TrackFrameFromFlags(request.table().preset());
+  if (!frame.ok()) return UsageError(std::string(frame.status().message()));
   request.mutable_table()->clear_rack();
   request.mutable_table()->clear_balls();
   if (auto bad = BuildSolver(request.mutable_solver())) return UsageError(*bad);
@@ -715,7 +749,7 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   }
   for (const std::string& h : absl::GetFlag(FLAGS_heldout)) {
     uint32_t i = 0;
-    if (!absl::SimpleAtoi(h, &i)) return UsageError("--heldout: file indices, got '" + h + "'");
+    if (!absl::SimpleAtoi(h, &i)) return UsageError("--heldout: shot indices, got '" + h + "'");
     request.add_heldout(i);
   }
   if (const auto w = absl::GetFlag(FLAGS_window)) request.set_strike_window_s(*w);
@@ -727,30 +761,38 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
     std::ifstream in(path, std::ios::binary);
     if (!in) return UsageError("table calibrate: cannot read '" + path + "'");
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    absl::StatusOr<billiards::TrackFile> file = ParseTrackText(text);
-    if (!file.ok()) return UsageError(InvalidValue(path + ": " + std::string(file.status().message())));
-    v1::RecordedShot* shot = request.add_shots();
-    shot->set_name(std::filesystem::path(path).filename().string().substr(0, 64));
-    for (size_t b = 0; b < file->balls.size(); ++b) {
-      v1::BallPlacement* p = shot->add_balls();
-      p->set_id(file->balls[b]);
-      p->set_x_m(file->spots[b].x());
-      p->set_y_m(file->spots[b].y());
-    }
-    if (!cue.empty()) {
-      shot->set_cue_ball(cue);
-    } else if (file->cue >= 0) {
-      shot->set_cue_ball(file->balls[static_cast<size_t>(file->cue)]);
-    } else {
-      return UsageError(InvalidValue(path + ": no ball leaves its spot by a centimetre; name the "
-                                            "struck ball with --cue-ball"));
-    }
-    for (const billiards::TrackPoint& t : file->points) {
-      v1::TrackedPoint* q = shot->add_points();
-      q->set_t_s(t.t_s);
-      q->set_ball(static_cast<uint32_t>(t.ball));
-      q->set_x_m(t.xy.x());
-      q->set_y_m(t.xy.y());
+    absl::StatusOr<std::vector<NamedTrack>> tracks = ParseTracks(text, *frame);
+    if (!tracks.ok()) return UsageError(InvalidValue(path + ": " + std::string(tracks.status().message())));
+    const std::string base = std::filesystem::path(path).filename().string();
+    for (const NamedTrack& track : *tracks) {
+      const billiards::TrackFile* file = &track.file;
+      v1::RecordedShot* shot = request.add_shots();
+      // A shot of a set is named by its file and its own name: "match.json#17" (the file's
+      // name cut to fit 64 bytes in all).
+      const std::string own = track.name.empty() ? "" : "#" + track.name.substr(0, 24);
+      const std::string name = base.substr(0, 64 - own.size()) + own;
+      shot->set_name(name);
+      for (size_t b = 0; b < file->balls.size(); ++b) {
+        v1::BallPlacement* p = shot->add_balls();
+        p->set_id(file->balls[b]);
+        p->set_x_m(file->spots[b].x());
+        p->set_y_m(file->spots[b].y());
+      }
+      if (!cue.empty()) {
+        shot->set_cue_ball(cue);
+      } else if (file->cue >= 0) {
+        shot->set_cue_ball(file->balls[static_cast<size_t>(file->cue)]);
+      } else {
+        return UsageError(InvalidValue(name + ": no ball leaves its spot by a centimetre; name "
+                                              "the struck ball with --cue-ball"));
+      }
+      for (const billiards::TrackPoint& t : file->points) {
+        v1::TrackedPoint* q = shot->add_points();
+        q->set_t_s(t.t_s);
+        q->set_ball(static_cast<uint32_t>(t.ball));
+        q->set_x_m(t.xy.x());
+        q->set_y_m(t.xy.y());
+      }
     }
   }
   std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();

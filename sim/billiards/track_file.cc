@@ -40,6 +40,24 @@ std::optional<double> Number(std::string_view s) {
 
 }  // namespace
 
+absl::Status ValidateTrackFrame(const TrackFrame& frame) {
+  if (!std::isfinite(frame.scale) || frame.scale <= 0.0 || frame.scale > 1e6) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("frame.scale: must be a finite number in (0, 1e6], got %g", frame.scale));
+  }
+  if (!frame.origin.allFinite() || frame.origin.cwiseAbs().maxCoeff() > 1e6) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "frame.origin: must be finite and within 1e6 m, got (%g, %g)", frame.origin.x(),
+        frame.origin.y()));
+  }
+  if (!frame.table_m.allFinite() || frame.table_m.minCoeff() < 0.0 || frame.table_m.maxCoeff() > 1e3) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "frame.table_m: must be finite and within [0, 1e3] m, got (%g, %g)", frame.table_m.x(),
+        frame.table_m.y()));
+  }
+  return absl::OkStatus();
+}
+
 absl::Status TrackBuilder::Add(int line, double t, std::string_view id, double x, double y) {
   if (++rows_ > kMaxTrackRows) {
     return absl::InvalidArgumentError(
@@ -64,7 +82,7 @@ absl::Status TrackBuilder::Add(int line, double t, std::string_view id, double x
     first_.emplace_back();
   }
   const int b = it->second;
-  const Eigen::Vector2d xy(x, y);
+  const Eigen::Vector2d xy = frame_.origin + frame_.scale * Eigen::Vector2d(x, y);
   if (t <= 0.0) {
     before_[static_cast<size_t>(b)] = xy;
   } else {
@@ -91,8 +109,9 @@ absl::StatusOr<TrackFile> TrackBuilder::Finish() && {
   return std::move(out_);
 }
 
-absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text) {
-  TrackBuilder rows;
+absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text, const TrackFrame& frame) {
+  if (absl::Status s = ValidateTrackFrame(frame); !s.ok()) return s;
+  TrackBuilder rows(frame);
   // Column indices of t, ball, x, y once the header is read.
   int col[4] = {-1, -1, -1, -1};
   bool header = false;

@@ -6,6 +6,7 @@
 //   0.02,white,-0.66,0.21     seconds from the strike; metres in the table frame (origin at
 //   ...                               the centre of the playing area)
 //
+// A tracker's own frame maps onto the table's through a TrackFrame (its origin and units).
 // Lines starting with '#' and blank lines are skipped. Rows with t <= 0 say where a ball
 // stood before the strike (its last such row); a ball without one starts where it is first
 // tracked. Rows with t > 0 are its track. The struck ball is the first whose tracked position
@@ -38,17 +39,38 @@ struct TrackFile {
 /// Most rows a track file may hold.
 inline constexpr int kMaxTrackRows = 1000000;
 
+/// Where a file's coordinates sit in the table frame: a file's (x, y) is the table's
+/// origin + scale (x, y). The default is the table frame itself. A tracker that measures from
+/// a corner of the playing area in metres has origin (-length/2, -width/2) and scale 1.
+struct TrackFrame {
+  double scale = 1.0;                                ///< metres per file unit, > 0
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< the file's (0, 0), table frame (m)
+  /// The playing area's length and width (m), for files that measure in fractions of it (a
+  /// match-tracking document, client/track_json.h); zero: not given.
+  Eigen::Vector2d table_m = Eigen::Vector2d::Zero();
+};
+
+/// InvalidArgument naming the field for a scale that is not finite and in (0, 1e6], an
+/// origin that is not finite and within 1e6 m, or a table size that is not finite and in
+/// [0, 1e3] m.
+absl::Status ValidateTrackFrame(const TrackFrame& frame);
+
 /// Gathers a track file's rows, in whatever form they come (CSV here; JSON lines in the CLI,
 /// client/track_json.h): each a ball's centre at a time, meaning what a CSV row means.
 class TrackBuilder {
  public:
+  /// Rows in `frame` (valid: ValidateTrackFrame), kept in the table frame.
+  explicit TrackBuilder(const TrackFrame& frame = {}) : frame_(frame) {}
+
   /// Adds one row; `line` names it in errors. InvalidArgument for a t, x or y that is not a
-  /// finite number within 1e6, an empty id, or more than kMaxTrackRows rows.
+  /// finite number within 1e6 (as written, before the frame maps it), an empty id, or more
+  /// than kMaxTrackRows rows.
   absl::Status Add(int line, double t, std::string_view id, double x, double y);
   /// The file: its spots, struck ball and points in time order. InvalidArgument without rows.
   absl::StatusOr<TrackFile> Finish() &&;
 
  private:
+  TrackFrame frame_;
   TrackFile out_;
   int rows_ = 0;
   std::map<std::string, int, std::less<>> index_;
@@ -58,8 +80,9 @@ class TrackBuilder {
 
 /// Parses a track file. InvalidArgument naming the line and the column for a missing or
 /// malformed header, a row with too few cells, a number that does not parse or is not finite,
-/// an empty ball id, or more than kMaxTrackRows rows. Rows need not be in time order.
-absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text);
+/// an empty ball id, more than kMaxTrackRows rows, or an invalid frame. Rows need not be in
+/// time order. Positions are in `frame` (the table's by default).
+absl::StatusOr<TrackFile> ParseTrackCsv(std::string_view text, const TrackFrame& frame = {});
 
 }  // namespace sportsim::billiards
 

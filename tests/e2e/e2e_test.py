@@ -1623,6 +1623,62 @@ class CalibrateAgainstServer(unittest.TestCase):
             runs.append(report)
         self.assertEqual(runs[0], runs[1])
 
+    def test_shot_sets_in_a_trackers_frame_calibrate_as_their_csv(self):
+        # Both recordings in one file, as public tracking sets come: a shot set in millimetres
+        # from a corner of the playing area (2.84 x 1.42 m), balls keyed by id, and a match
+        # tracker's export (fractions of the playing area, ticks of 500 us). Read in their
+        # frames they calibrate the rolling resistance back as the CSV files do; --heldout
+        # counts the file's shots.
+        shots, entries = [], []
+        for name, path in (("a", self.files[0]), ("b", self.files[1])):
+            balls, datasets = {}, {}
+            with open(path) as f:
+                for row in csv.DictReader(f):
+                    t, x, y = float(row["t_s"]), float(row["x_m"]), float(row["y_m"])
+                    ball = balls.setdefault(row["id"], {"t": [], "x": [], "y": []})
+                    ball["t"].append(t)
+                    ball["x"].append(1000 * (x + 1.42))
+                    ball["y"].append(1000 * (y + 0.71))
+                    color = {"white": 1, "yellow": 2, "red": 3}[row["id"]]
+                    datasets.setdefault(color, []).append(
+                        {"DeltaT_500us": round(t / 0.0005), "X": (x + 1.42) / 2.84,
+                         "Y": (y + 0.71) / 1.42})
+            shots.append({"id": name, "balls": balls})
+            entries.append({"PathTrackingId": 100 + len(entries), "PathTracking": {"DataSets": [
+                {"BallColor": c, "Coords": coords} for c, coords in datasets.items()]}})
+        shot_set = os.path.join(self.dir.name, "set.json")
+        with open(shot_set, "w") as f:
+            json.dump(shots, f)
+        match = os.path.join(self.dir.name, "match.json")
+        with open(match, "w") as f:
+            json.dump({"Match": {"Sets": [{"Entries": [{"Scoring": {}}] + entries}]}}, f, indent=1)
+        for path, frame, names in (
+                (shot_set, ["--track-origin", "corner", "--track-scale", "0.001"],
+                 ["set.json#a", "set.json#b"]),
+                (match, [], ["match.json#100", "match.json#101"])):
+            r = cli(self.server.address, "--format", "json", "table", "calibrate", path,
+                    "--table", "carom", "--fit", "mu_roll", "--heldout", "1", *frame)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            report = json.loads(r.stdout)
+            self.assertAlmostEqual(report["params"]["mu_roll"], 0.006, delta=0.006 * 0.01)
+            self.assertEqual([s["name"] for s in report["shots"]], names)
+            self.assertEqual([s.get("heldout", False) for s in report["shots"]], [False, True])
+            for shot in report["shots"]:
+                self.assertEqual(shot["strike_after"]["ball"], "white" if path == shot_set else "1")
+                self.assertLess(shot["after"]["mean_m"], 1e-3)
+        # In the table's own frame the same numbers are kilometres off the cloth: refused.
+        r = cli(self.server.address, "table", "calibrate", shot_set, "--table", "carom")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("not on the cloth", r.stderr)
+        r = cli(self.server.address, "table", "calibrate", match, "--table", "carom",
+                "--track-scale", "2")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("sets its own frame", r.stderr)
+        r = cli(self.server.address, "table", "calibrate", shot_set, "--table", "carom",
+                "--track-origin", "middle")
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn("--track-origin: centre or corner", r.stderr)
+
     def test_calibrate_text_names_the_flags_to_use(self):
         r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
                 "--fit", "mu_roll=0.002:0.015", "--heldout", "1")
