@@ -20,6 +20,7 @@
 #include "absl/strings/str_join.h"
 #include "absl/strings/str_split.h"
 #include "client/billiards_flags.h"
+#include "client/calibration_upload.h"
 #include "client/cli.h"
 #include "client/game_text.h"
 #include "client/table_svg.h"
@@ -795,33 +796,51 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
       }
     }
   }
-  std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
-  std::unique_ptr<grpc::ClientReader<v1::CalibrateTableResponse>> reader =
-      stub.CalibrateTable(call.get(), request);
   v1::CalibrateTableResponse r, last;
   bool have_report = false;
   int shown = -1;
-  while (reader->Read(&r)) {
+  auto progress = [&] {
     if (r.has_report()) {  // the last message (the server keeps only the latest progress)
       last = r;
       have_report = true;
       std::cerr << "calibrate: 100% (done)\n";
-      continue;
+      return;
     }
     const int pct = static_cast<int>(r.fraction() * 100);
     if (pct / 10 != shown / 10) {  // every tenth of the way
       std::cerr << "calibrate: " << pct << "% (" << r.stage() << ")\n";
       shown = pct;
     }
+  };
+  // Uploaded in parts, each within the server's request limit however many shots there are.
+  grpc::Status status;
+  {
+    std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
+    std::unique_ptr<grpc::ClientReaderWriter<v1::CalibrationUpload, v1::CalibrateTableResponse>>
+        stream = stub.UploadCalibration(call.get());
+    for (const v1::CalibrationUpload& part : CalibrationUploadParts(request)) {
+      if (!stream->Write(part)) break;  // the server ended the call: Finish says why
+    }
+    stream->WritesDone();
+    while (stream->Read(&r)) progress();
+    status = stream->Finish();
   }
-  const grpc::Status status = reader->Finish();
-  if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED &&
-      absl::StrContains(status.error_message(), "larger than max")) {
-    return ReportRpcError(grpc::Status(
-        status.error_code(),
-        absl::StrFormat("%s: the recorded shots make a %d-byte request; a server takes up to "
-                        "--max_request_bytes (default 64 KiB): raise it, or give fewer shots",
-                        status.error_message(), request.ByteSizeLong())));
+  if (status.error_code() == grpc::StatusCode::UNIMPLEMENTED && shown < 0 && !have_report) {
+    // A server from before UploadCalibration: the whole request in one message.
+    std::unique_ptr<grpc::ClientContext> call = ctx.NewCall();
+    std::unique_ptr<grpc::ClientReader<v1::CalibrateTableResponse>> reader =
+        stub.CalibrateTable(call.get(), request);
+    while (reader->Read(&r)) progress();
+    status = reader->Finish();
+    if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED &&
+        absl::StrContains(status.error_message(), "larger than max")) {
+      return ReportRpcError(grpc::Status(
+          status.error_code(),
+          absl::StrFormat("%s: the recorded shots make a %d-byte request, and this server "
+                          "takes them in one message up to its --max_request_bytes: raise "
+                          "it, or give fewer shots",
+                          status.error_message(), request.ByteSizeLong())));
+    }
   }
   if (!status.ok()) return ReportRpcError(status);
   if (!have_report) return ReportRpcError(grpc::Status(grpc::StatusCode::INTERNAL, "no report"));

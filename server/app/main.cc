@@ -104,6 +104,9 @@ ABSL_FLAG(int, http_threads, 2, "Threads polling the gRPC-Web port's connections
 ABSL_FLAG(int64_t, stream_window_bytes, 1 << 20,
           "Finished, unsent work a server stream may hold per call (SimulateShots computes ahead "
           "of its reader only this far; gRPC-Web streams stop reading past it)");
+ABSL_FLAG(int64_t, max_upload_bytes, int64_t{64} << 20,
+          "What UploadCalibration's uploads in progress may hold in all (bytes; an upload past "
+          "it is refused with RESOURCE_EXHAUSTED)");
 ABSL_FLAG(Seconds, stream_stall_timeout, Seconds{absl::Seconds(30)},
           "A SimulateShots stream whose client reads nothing this long is stopped (0: never)");
 ABSL_FLAG(int, sim_workers, 0,
@@ -217,6 +220,12 @@ int main(int argc, char** argv) {
   config.http.threads = absl::GetFlag(FLAGS_http_threads);
   config.streams.window_bytes = absl::GetFlag(FLAGS_stream_window_bytes);
   config.streams.stall_timeout = absl::GetFlag(FLAGS_stream_stall_timeout).d;
+  config.streams.upload_bytes = absl::GetFlag(FLAGS_max_upload_bytes);
+  if (config.streams.upload_bytes < (64 << 10) || config.streams.upload_bytes > (int64_t{1} << 36)) {
+    std::cerr << "sportsim-server: --max_upload_bytes must be in [65536, 68719476736], got "
+              << config.streams.upload_bytes << "\n";
+    return 2;
+  }
   if (config.streams.window_bytes < (16 << 10) || config.streams.window_bytes > (int64_t{1} << 30)) {
     std::cerr << "sportsim-server: --stream_window_bytes must be in [16384, 1073741824], got "
               << config.streams.window_bytes << "\n";

@@ -57,7 +57,7 @@ struct ServerConfig {
   GrpcWebLimits http;  ///< the web port's connection limits and timeouts (--http_*)
   /// Launch monitors over GSPro Open Connect: listen address ("" = off, the default).
   OpenConnectOptions open_connect;
-  StreamLimits streams;  ///< --stream_window_bytes, --stream_stall_timeout
+  StreamLimits streams;  ///< --stream_window_bytes, --stream_stall_timeout, --max_upload_bytes
   WorkLimits work;  ///< the simulation pool (--sim_workers, --max_queued_simulations,
                     ///< --max_request_cpu)
   /// The journal (--data_dir, --store, --node, --lease): none when both data_dir and

@@ -87,6 +87,54 @@ absl::StatusOr<b::Recording> ShotFromProto(const b::TableModel& model, const v1:
 
 }  // namespace
 
+absl::Status CalibrationUploadAssembler::Add(const v1::CalibrationUpload& part) {
+  const std::string at = absl::StrFormat("upload[%d]", index_++);
+  switch (part.part_case()) {
+    case v1::CalibrationUpload::kSetup:
+      if (setup_) return absl::InvalidArgumentError(at + ".setup: only the first message is `setup`");
+      if (part.setup().shots_size() > 0) {
+        return absl::InvalidArgumentError(
+            at + ".setup.shots: must be empty: send each shot as a `shot` message");
+      }
+      request_ = part.setup();
+      setup_ = true;
+      return absl::OkStatus();
+    case v1::CalibrationUpload::kShot:
+      if (!setup_) return absl::InvalidArgumentError(at + ": the first message must be `setup`");
+      if (request_.shots_size() == kMaxCalibrationShots) {
+        return absl::InvalidArgumentError(
+            absl::StrFormat("%s.shot: at most %d recorded shots", at, kMaxCalibrationShots));
+      }
+      points_ += part.shot().points_size();
+      if (points_ > kMaxCalibrationPoints) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "%s.shot.points: at most %d tracked points in all", at, kMaxCalibrationPoints));
+      }
+      *request_.add_shots() = part.shot();
+      return absl::OkStatus();
+    case v1::CalibrationUpload::kPoints:
+      if (!setup_) return absl::InvalidArgumentError(at + ": the first message must be `setup`");
+      if (request_.shots_size() == 0) {
+        return absl::InvalidArgumentError(at + ".points: no `shot` yet to add them to");
+      }
+      points_ += part.points().points_size();
+      if (points_ > kMaxCalibrationPoints) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "%s.points: at most %d tracked points in all", at, kMaxCalibrationPoints));
+      }
+      request_.mutable_shots(request_.shots_size() - 1)->mutable_points()->MergeFrom(part.points().points());
+      return absl::OkStatus();
+    case v1::CalibrationUpload::PART_NOT_SET:
+      break;
+  }
+  return absl::InvalidArgumentError(at + ": empty: give `setup`, `shot` or `points`");
+}
+
+absl::StatusOr<v1::CalibrateTableRequest> CalibrationUploadAssembler::Finish() && {
+  if (!setup_) return absl::InvalidArgumentError("upload: no `setup` message");
+  return std::move(request_);
+}
+
 absl::StatusOr<CalibrationJob> CalibrationJobFromProto(const v1::CalibrateTableRequest& request) {
   if (request.table().balls_size() > 0 || !request.table().rack().empty()) {
     return absl::InvalidArgumentError(

@@ -684,19 +684,30 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
   v1::SimulateShotsResponse out_;  // the message being written
 };
 
-// CalibrateTable: one calibration, one job on the pool's batch workers (below interactive
-// work), under the request's CPU budget (--max_request_cpu), cancellation and deadline. Its
-// progress is streamed as it goes; only the latest unsent progress is kept (a slow reader sees
-// fewer, and the server holds one message), and the last message carries the report. The
-// stream is finished once the job has ended and no write is in flight, so nothing touches the
-// reactor after it is done.
-class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTableResponse> {
+// A calibration's call: one calibration, one job on the pool's batch workers (below
+// interactive work), under the request's CPU budget (--max_request_cpu), cancellation and
+// deadline. Its progress is streamed as it goes; only the latest unsent progress is kept (a
+// slow reader sees fewer, and the server holds one message), and the last message carries the
+// report. The stream is finished once the job has ended and no write is in flight, so nothing
+// touches the reactor after it is done. `Base` is the reactor: CalibrateTable's writes only,
+// UploadCalibration's reads the request first.
+template <typename Base>
+class CalibrationCall : public Base {
  public:
-  CalibrateReactor(WorkPool* pool, grpc::CallbackServerContext* ctx,
-                   const v1::CalibrateTableRequest& request) {
+  void OnWriteDone(bool ok) override {
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      writing_ = false;
+      if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
+    });
+  }
+  void OnDone() override { delete this; }
+
+ protected:
+  // Checks the request and queues its job, or ends the call with the error.
+  void Begin(WorkPool* pool, grpc::CallbackServerContext* ctx, const v1::CalibrateTableRequest& request) {
     absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(request);
     if (!job.ok()) {
-      Finish(ToGrpcStatus(job.status()));
+      Fail(job.status());
       return;
     }
     auto shared = std::make_shared<CalibrationJob>(*std::move(job));
@@ -721,13 +732,16 @@ class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTabl
     }
   }
 
-  void OnWriteDone(bool ok) override {
+  // Ends the call with `status` (no job running, nothing written).
+  void Fail(const absl::Status& status) {
     Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-      writing_ = false;
-      if (!ok && error_.ok()) error_ = absl::CancelledError("the stream was closed");
+      if (error_.ok()) error_ = status;
     });
   }
-  void OnDone() override { delete this; }
+
+  // Called once, just before the call finishes (its job ended, nothing left to write), so a
+  // client that has its status sees what the call held given back.
+  virtual void Finishing() {}
 
  private:
   template <typename F>
@@ -738,7 +752,10 @@ class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTabl
       f();
       finish = Pump();
     }
-    if (finish.has_value()) Finish(*finish);
+    if (finish.has_value()) {
+      Finishing();
+      this->Finish(*finish);
+    }
   }
 
   // Writes the pending message when no write is in flight; says when to finish: the job has
@@ -750,7 +767,7 @@ class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTabl
       out_ = *std::move(pending_);
       pending_.reset();
       writing_ = true;
-      StartWrite(&out_);
+      this->StartWrite(&out_);
       return std::nullopt;
     }
     if (!writing_ && !running_) {
@@ -809,12 +826,99 @@ class CalibrateReactor final : public grpc::ServerWriteReactor<v1::CalibrateTabl
   v1::CalibrateTableResponse out_;  // the message being written
 };
 
+// CalibrateTable: the request in one message.
+class CalibrateReactor final
+    : public CalibrationCall<grpc::ServerWriteReactor<v1::CalibrateTableResponse>> {
+ public:
+  CalibrateReactor(WorkPool* pool, grpc::CallbackServerContext* ctx,
+                   const v1::CalibrateTableRequest& request) {
+    Begin(pool, ctx, request);
+  }
+};
+
+// Bytes held by all the calls of one kind at once (UploadCalibration's uploads), against a cap.
+class ByteBudget {
+ public:
+  explicit ByteBudget(int64_t cap) : cap_(cap) {}
+  bool Reserve(int64_t n) {
+    int64_t used = used_.load(std::memory_order_relaxed);
+    do {
+      if (used + n > cap_) return false;
+    } while (!used_.compare_exchange_weak(used, used + n, std::memory_order_relaxed));
+    return true;
+  }
+  void Release(int64_t n) { used_.fetch_sub(n, std::memory_order_relaxed); }
+  int64_t cap() const { return cap_; }
+
+ private:
+  const int64_t cap_;
+  std::atomic<int64_t> used_{0};
+};
+
+// UploadCalibration: the request in parts, each counted against the server's upload budget
+// from its arrival until the call finishes (the job's recordings are about as large); the
+// calibration begins when the client half-closes.
+class UploadCalibrationReactor final
+    : public CalibrationCall<grpc::ServerBidiReactor<v1::CalibrationUpload, v1::CalibrateTableResponse>> {
+ public:
+  UploadCalibrationReactor(WorkPool* pool, grpc::CallbackServerContext* ctx, ByteBudget* budget)
+      : pool_(pool), ctx_(ctx), budget_(budget) {
+    StartRead(&in_);
+  }
+  ~UploadCalibrationReactor() override { budget_->Release(held_); }  // 0 once finished
+
+  void OnReadDone(bool ok) override {
+    if (!ok) {  // the client half-closed, or the call is going away
+      if (ctx_->IsCancelled()) {
+        Fail(absl::CancelledError("the upload was cancelled"));
+        return;
+      }
+      absl::StatusOr<v1::CalibrateTableRequest> request = std::move(assembler_).Finish();
+      if (!request.ok()) {
+        Fail(request.status());
+        return;
+      }
+      Begin(pool_, ctx_, *request);
+      return;
+    }
+    const int64_t n = static_cast<int64_t>(in_.ByteSizeLong());
+    if (!budget_->Reserve(n)) {
+      Fail(absl::ResourceExhaustedError(absl::StrFormat(
+          "the uploads in progress hold the server's --max_upload_bytes (%d) already: try again "
+          "later",
+          budget_->cap())));
+      return;
+    }
+    held_ += n;
+    if (absl::Status s = assembler_.Add(in_); !s.ok()) {
+      Fail(s);
+      return;
+    }
+    StartRead(&in_);
+  }
+
+ private:
+  // Given back before the status goes out, not when gRPC is done with the call (later), so
+  // the client's next upload finds it free.
+  void Finishing() override {
+    budget_->Release(held_);
+    held_ = 0;
+  }
+
+  WorkPool* const pool_;
+  grpc::CallbackServerContext* const ctx_;
+  ByteBudget* const budget_;
+  int64_t held_ = 0;  // reserved from budget_
+  v1::CalibrationUpload in_;
+  CalibrationUploadAssembler assembler_;
+};
+
 class BilliardsService final : public v1::Billiards::CallbackService {
  public:
   BilliardsService(TableRegistry* tables, WorkPool* pool, int64_t max_reply_bytes,
                    double cpu_budget_s, StreamLimits streams)
       : tables_(tables), pool_(pool), max_reply_bytes_(max_reply_bytes),
-        cpu_budget_s_(cpu_budget_s), streams_(streams) {}
+        cpu_budget_s_(cpu_budget_s), streams_(streams), uploads_(streams.upload_bytes) {}
 
  private:
   TableRegistry* const tables_;
@@ -822,6 +926,7 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   const int64_t max_reply_bytes_;
   const double cpu_budget_s_;
   const StreamLimits streams_;
+  ByteBudget uploads_;  // UploadCalibration's uploads in progress
 
   grpc::ServerUnaryReactor* CreateTable(grpc::CallbackServerContext* ctx,
                                         const v1::CreateTableRequest* request,
@@ -873,6 +978,10 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   grpc::ServerWriteReactor<v1::CalibrateTableResponse>* CalibrateTable(
       grpc::CallbackServerContext* ctx, const v1::CalibrateTableRequest* request) override {
     return new CalibrateReactor(pool_, ctx, *request);
+  }
+  grpc::ServerBidiReactor<v1::CalibrationUpload, v1::CalibrateTableResponse>* UploadCalibration(
+      grpc::CallbackServerContext* ctx) override {
+    return new UploadCalibrationReactor(pool_, ctx, &uploads_);
   }
   grpc::ServerUnaryReactor* PreviewShot(grpc::CallbackServerContext* ctx,
                                         const v1::PreviewShotRequest* request,

@@ -1,12 +1,18 @@
 // CalibrateTableRequest bytes -> CalibrationJobFromProto (the CalibrateTable RPC's validation,
 // before any work), then, for a valid job on the event engine, one shot scored with a fixed
 // strike: errors name a request field, are short and have no raw control characters; an
-// accepted job has valid recordings and finite scores.
+// accepted job has valid recordings and finite scores. The request cut into UploadCalibration's
+// parts (client/calibration_upload.h; the part size from the input's length) and put back
+// together is the request again, unless the assembler refuses it, and then so does the job.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 
+#include <google/protobuf/util/field_comparator.h>
+#include <google/protobuf/util/message_differencer.h>
+
+#include "client/calibration_upload.h"
 #include "server/billiards/calibration.h"
 #include "tests/fuzz/convert_checks.h"
 
@@ -18,6 +24,27 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   v1::CalibrateTableRequest request;
   if (!request.ParseFromArray(data, static_cast<int>(size))) return -1;
   absl::StatusOr<server::CalibrationJob> job = server::CalibrationJobFromProto(request);
+  server::CalibrationUploadAssembler assembler;
+  absl::Status added;
+  for (const v1::CalibrationUpload& part : cli::CalibrationUploadParts(request, 64 + size % 4096)) {
+    added = assembler.Add(part);
+    if (!added.ok()) break;
+  }
+  if (added.ok()) {
+    absl::StatusOr<v1::CalibrateTableRequest> back = std::move(assembler).Finish();
+    // Compared field by field (a map's serialization follows its iteration order, which
+    // copies need not keep), a NaN equal to itself.
+    google::protobuf::util::DefaultFieldComparator same_nan;
+    same_nan.set_treat_nan_as_equal(true);
+    google::protobuf::util::MessageDifferencer differ;
+    differ.set_field_comparator(&same_nan);
+    FUZZ_CHECK(back.ok() && differ.Compare(*back, request),
+               "the uploaded parts do not make the request");
+  } else {
+    fuzz::CheckMessage("CalibrationUploadAssembler", added);
+    FUZZ_CHECK(!job.ok(), "an upload refused (%s) of a request accepted in one message",
+               added.ToString().c_str());
+  }
   if (!job.ok()) {
     fuzz::CheckRequestError("CalibrationJobFromProto", job.status(), fields);
     return 0;

@@ -2,7 +2,8 @@
 // trajectories (a carom table with another rolling resistance, sampled at 50 Hz) calibrate the
 // preset back to it, with the report equal to the offline calibration's bit for bit; progress
 // in order; bad requests refused naming the field before any work; the CPU budget and the
-// client's cancellation stop the job.
+// client's cancellation stop the job. UploadCalibration: the same calibration in parts, each
+// within the default request limit, with its own checks and the server's upload budget.
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -10,12 +11,14 @@
 #include <thread>
 #include <vector>
 
+#include <google/protobuf/util/message_differencer.h>
 #include <grpcpp/grpcpp.h>
 
 #include "absl/strings/match.h"
 #include "absl/time/time.h"
 #include "gmock/gmock.h"
 #include "gtest/gtest.h"
+#include "client/calibration_upload.h"
 #include "server/app/server_app.h"
 #include "server/billiards/calibration.h"
 #include "sim/billiards/calibrate.h"
@@ -119,6 +122,33 @@ class CalibrationTest : public ::testing::Test {
     return reader->Finish();
   }
 
+  // The report is the offline calibration's of the same request, bit for bit.
+  static void ExpectTheOfflineReport(const v1::CalibrateTableRequest& req,
+                                     const v1::CalibrationReport& rep) {
+    absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(req);
+    ASSERT_TRUE(job.ok()) << job.status();
+    absl::StatusOr<billiards::CalibrationReport> offline =
+        billiards::Calibrate(job->spec, job->solver, job->recordings, job->options);
+    ASSERT_TRUE(offline.ok()) << offline.status();
+    EXPECT_EQ(offline->params.mu_roll, rep.params().at("mu_roll"));
+    EXPECT_EQ(offline->simulations, rep.simulations());
+    EXPECT_EQ(offline->shots[1].after.mean_m, rep.shots(1).after().mean_m());
+  }
+
+  // Runs an upload of `parts` to its end: the messages and the status.
+  grpc::Status Upload(const std::vector<v1::CalibrationUpload>& parts,
+                      std::vector<v1::CalibrateTableResponse>* out) {
+    std::unique_ptr<grpc::ClientContext> ctx = Ctx();
+    auto stream = stub_->UploadCalibration(ctx.get());
+    for (const v1::CalibrationUpload& part : parts) {
+      if (!stream->Write(part)) break;
+    }
+    stream->WritesDone();
+    v1::CalibrateTableResponse r;
+    while (stream->Read(&r)) out->push_back(r);
+    return stream->Finish();
+  }
+
   ServerConfig config_;
   std::unique_ptr<ServerApp> app_;
   std::shared_ptr<grpc::Channel> channel_;
@@ -155,14 +185,7 @@ TEST_F(CalibrationTest, RecoversTheTablesRollingResistanceAsTheOfflineCalibratio
   EXPECT_GT(rep.simulations(), 0);
   EXPECT_GT(rep.cpu_s(), 0.0);
 
-  absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(req);
-  ASSERT_TRUE(job.ok()) << job.status();
-  absl::StatusOr<billiards::CalibrationReport> offline =
-      billiards::Calibrate(job->spec, job->solver, job->recordings, job->options);
-  ASSERT_TRUE(offline.ok()) << offline.status();
-  EXPECT_EQ(offline->params.mu_roll, rep.params().at("mu_roll"));
-  EXPECT_EQ(offline->simulations, rep.simulations());
-  EXPECT_EQ(offline->shots[1].after.mean_m, rep.shots(1).after().mean_m());
+  ExpectTheOfflineReport(req, rep);
 }
 
 // Refused before any work, with the field named.
@@ -217,6 +240,109 @@ TEST_F(CalibrationTest, TheRequestSizeLimitHolds) {
   const grpc::Status st = Calibrate(Request(), &msgs);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
   EXPECT_TRUE(msgs.empty());
+}
+
+// Cut into parts of 16 kB, the calibration that the default request limit refuses in one
+// message runs, and reports what the offline calibration of the whole request does, bit for
+// bit. The parts put back together are the request.
+TEST_F(CalibrationTest, UploadedInPartsItRunsUnderTheDefaultLimit) {
+  config_.max_receive_message_bytes = 64 << 10;
+  Start();
+  const v1::CalibrateTableRequest req = Request();
+  ASSERT_GT(req.ByteSizeLong(), size_t{64} << 10);
+  const std::vector<v1::CalibrationUpload> parts = cli::CalibrationUploadParts(req, 16 << 10);
+  ASSERT_GT(parts.size(), 4u);  // the setup, and each shot over several parts
+  CalibrationUploadAssembler assembler;
+  for (const v1::CalibrationUpload& part : parts) {
+    EXPECT_LE(part.ByteSizeLong(), size_t{16} << 10);
+    ASSERT_TRUE(assembler.Add(part).ok());
+  }
+  absl::StatusOr<v1::CalibrateTableRequest> back = std::move(assembler).Finish();
+  ASSERT_TRUE(back.ok()) << back.status();
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(*back, req));
+
+  std::vector<v1::CalibrateTableResponse> msgs;
+  const grpc::Status st = Upload(parts, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_FALSE(msgs.empty());
+  ASSERT_TRUE(msgs.back().has_report());
+  const v1::CalibrationReport& rep = msgs.back().report();
+  EXPECT_NEAR(rep.params().at("mu_roll"), 0.006, 0.006 * 0.01);
+  ExpectTheOfflineReport(req, rep);
+}
+
+// An upload out of order, or over a calibration's limits, is refused naming the message; the
+// assembled request is checked as CalibrateTable's is.
+TEST_F(CalibrationTest, BadUploadsAreInvalidArgumentNamingTheMessage) {
+  Start();
+  const std::vector<v1::CalibrationUpload> parts = cli::CalibrationUploadParts(Request());
+  auto refused = [&](const std::vector<v1::CalibrationUpload>& upload) {
+    std::vector<v1::CalibrateTableResponse> msgs;
+    const grpc::Status st = Upload(upload, &msgs);
+    EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << st.error_message();
+    EXPECT_TRUE(msgs.empty());
+    return st.error_message();
+  };
+  EXPECT_THAT(refused({}), HasSubstr("upload: no `setup`"));
+  EXPECT_THAT(refused({parts[1]}), HasSubstr("upload[0]: the first message must be `setup`"));
+  EXPECT_THAT(refused({parts[0], parts[0]}), HasSubstr("upload[1].setup: only the first"));
+  v1::CalibrationUpload points;
+  points.mutable_points()->add_points()->set_t_s(0.02);
+  EXPECT_THAT(refused({parts[0], points}), HasSubstr("upload[1].points: no `shot` yet"));
+  EXPECT_THAT(refused({parts[0], v1::CalibrationUpload()}), HasSubstr("upload[1]: empty"));
+  v1::CalibrationUpload with_shots = parts[0];
+  *with_shots.mutable_setup()->add_shots() = Request().shots(0);
+  EXPECT_THAT(refused({with_shots}), HasSubstr("upload[0].setup.shots: must be empty"));
+  std::vector<v1::CalibrationUpload> many = {parts[0]};
+  for (int i = 0; i <= kMaxCalibrationShots; ++i) many.push_back(parts[1]);
+  EXPECT_THAT(refused(many), HasSubstr("upload[201].shot: at most 200 recorded shots"));
+  // Assembled, the request is CalibrateTable's: its checks name the shot and the field.
+  std::vector<v1::CalibrationUpload> bad = parts;
+  v1::RecordedShot* last = bad[1].mutable_shot();
+  last->set_cue_ball("blue");
+  EXPECT_THAT(refused(bad), HasSubstr("shots[0].cue_ball"));
+}
+
+// The uploads in progress share --max_upload_bytes: one that would pass it is refused, and
+// what a call held is given back when it ends.
+TEST_F(CalibrationTest, UploadsShareTheServersBudget) {
+  config_.streams.upload_bytes = 96 << 10;  // less than the two shots' 130 kB
+  Start();
+  const std::vector<v1::CalibrationUpload> parts = cli::CalibrationUploadParts(Request(), 16 << 10);
+  std::vector<v1::CalibrateTableResponse> msgs;
+  grpc::Status st = Upload(parts, &msgs);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
+  EXPECT_THAT(st.error_message(), HasSubstr("--max_upload_bytes"));
+  // Uploads cancelled half way give back what they held too (four would hold more than the
+  // budget).
+  for (int i = 0; i < 4; ++i) {
+    std::unique_ptr<grpc::ClientContext> ctx = Ctx();
+    auto stream = stub_->UploadCalibration(ctx.get());
+    ASSERT_TRUE(stream->Write(parts[0]));
+    ASSERT_TRUE(stream->Write(parts[1]));
+    ASSERT_TRUE(stream->Write(parts[2]));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the server reads them
+    ctx->TryCancel();
+    EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  }
+  // The server hears of a cancellation a little after the client's Finish: once it has, one
+  // shot fits (a leak would never let it).
+  v1::CalibrateTableRequest small = Request();
+  small.mutable_shots()->RemoveLast();
+  for (int tries = 0;; ++tries) {
+    msgs.clear();
+    st = Upload(cli::CalibrationUploadParts(small, 16 << 10), &msgs);
+    if (st.ok() || tries == 100) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  EXPECT_TRUE(st.ok()) << st.error_message();
+  // Then again and again: a finished call has given back what it held before its client
+  // has the status.
+  for (int i = 0; i < 3; ++i) {
+    msgs.clear();
+    st = Upload(cli::CalibrationUploadParts(small, 16 << 10), &msgs);
+    EXPECT_TRUE(st.ok()) << i << ": " << st.error_message();
+  }
 }
 
 // A calibration is held to --max_request_cpu like any request, and stops when its client goes.
