@@ -23,11 +23,14 @@
 // half of the shots, scored on the second half (held out):
 //  - fit: the strike fitted to the whole shot, the median over shots of the mean distance
 //    between tracked and simulated centres (every ball, every frame);
+//  - rails: the share of shots whose struck ball meets the rails the recording shows, in the
+//    same order (the first three; the recording's read from its track alone, TrackedRails);
 //  - predict: the strike fitted on the first 0.4 s only, the median distance of the struck
 //    ball's final position from where it was last tracked, and the share of shots whose struck
-//    ball meets the cushions in the same order (the rails, first three hits) as the best fit;
+//    ball meets the recorded rails (as above);
 //  - cpu: the median thread CPU of one shot's simulation (its strike as fitted).
-// CSV on stdout: source,model,constants,fit_mm,predict_final_mm,predict_rails,cpu_us,shots
+// CSV on stdout: source,model,constants,fit_mm,fit_rails,predict_final_mm,predict_rails,cpu_us,
+// shots
 //
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
@@ -193,9 +196,15 @@ bool WriteShotSet(const std::string& path, const TableSpec& spec, const std::vec
   return static_cast<bool>(out);
 }
 
-// The cushions met by the struck ball, in order (the first three), and where it rests.
+// The first three of a sequence of rails.
+std::vector<Rail> FirstThree(std::vector<Rail> rails) {
+  if (rails.size() > 3) rails.resize(3);
+  return rails;
+}
+
+// The rails met by the struck ball, in order (the first three), and where it rests.
 struct Outcome {
-  std::vector<int> rails;
+  std::vector<Rail> rails;
   Eigen::Vector2d rest = Eigen::Vector2d::Zero();
   double cpu_s = 0.0;
 };
@@ -207,9 +216,7 @@ Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike)
   absl::StatusOr<ShotResult> r = SimulateShot(m, SolverOptions{}, s, ShotOptions{});
   o.cpu_s = ThreadCpuSeconds() - c0;
   if (!r.ok()) return o;
-  for (const Event& e : r->events) {
-    if (e.kind == EventKind::kBallCushion && e.a == rec.cue && o.rails.size() < 3) o.rails.push_back(e.other);
-  }
+  o.rails = FirstThree(SimulatedRails(m.spec(), r->events, rec.cue));
   o.rest = r->final_state.balls[static_cast<size_t>(rec.cue)].r.head<2>();
   return o;
 }
@@ -225,7 +232,7 @@ void Score(const std::string& source, const std::string& model_name, const std::
            const TableSpec& spec, const std::vector<Recording>& test) {
   const TableModel m = *TableModel::Create(spec);
   std::vector<double> fit, final_err, cpu;
-  int same_rails = 0, n = 0;
+  int fit_rails = 0, predict_rails = 0, n = 0;
   for (const Recording& rec : test) {
     absl::StatusOr<StrikeFit> whole = FitStrike(m, SolverOptions{}, rec);
     absl::StatusOr<StrikeFit> early = FitStrike(m, SolverOptions{}, rec, StrikeBounds{}, kPredictWindow);
@@ -235,12 +242,15 @@ void Score(const std::string& source, const std::string& model_name, const std::
     const Outcome best = Play(m, rec, whole->strike);
     const Outcome predicted = Play(m, rec, early->strike);
     final_err.push_back((predicted.rest - LastTracked(rec)).norm());
-    same_rails += predicted.rails == best.rails;
+    const std::vector<Rail> recorded = FirstThree(TrackedRails(m, rec, rec.cue));
+    fit_rails += best.rails == recorded;
+    predict_rails += predicted.rails == recorded;
     cpu.push_back(best.cpu_s);
   }
-  std::printf("%s,%s,%s,%.1f,%.0f,%.2f,%.0f,%d\n", source.c_str(), model_name.c_str(),
-              constants.c_str(), 1e3 * Median(fit), 1e3 * Median(final_err),
-              n > 0 ? static_cast<double>(same_rails) / n : 0.0, 1e6 * Median(cpu), n);
+  const auto share = [n](int k) { return n > 0 ? static_cast<double>(k) / n : 0.0; };
+  std::printf("%s,%s,%s,%.1f,%.2f,%.0f,%.2f,%.0f,%d\n", source.c_str(), model_name.c_str(),
+              constants.c_str(), 1e3 * Median(fit), share(fit_rails), 1e3 * Median(final_err),
+              share(predict_rails), 1e6 * Median(cpu), n);
   std::fflush(stdout);
 }
 
@@ -324,7 +334,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  std::printf("source,model,constants,fit_mm,predict_final_mm,predict_rails,cpu_us,shots\n");
+  std::printf("source,model,constants,fit_mm,fit_rails,predict_final_mm,predict_rails,cpu_us,shots\n");
   if (!write_set.empty() && !WriteShotSet(write_set, *MakeTablePreset("carom"), Synthetic(shots, 33))) {
     std::fprintf(stderr, "%s: cannot write\n", write_set.c_str());
     return 1;

@@ -42,7 +42,9 @@ with its preset's constants, its rolling resistance fitted, and calibrated; held
   with the fitted constants (relative to the rebound speed, and R w over the approach speed).
 - **Recordings**: the median mean distance between tracked and simulated centres (mm) with the
   strike fitted to the whole shot; **predicted**: the struck ball's final position (mm) with
-  the strike fitted on the first 0.4 s, calibrated constants.
+  the strike fitted on the first 0.4 s, calibrated constants. **Rails**: the share of shots
+  whose struck ball meets the first three rails the recording shows (read from its track
+  alone), in order, with the whole-shot fit / the 0.4 s prediction, calibrated constants.
 - The reference of both is Mathavan et al.'s model, so `mathavan2010` meets it by construction
   (its rebound error is its integration error at 500 steps); the rows below it say what a
   cheaper model loses against a cushion measured in a laboratory. No public recording of a
@@ -96,15 +98,17 @@ def main():
     lines = [
         "| model | CPU per impact | CPU per shot | rebound angle, preset / fitted (deg) "
         "| speed, fitted | spin, fitted | recordings: preset / rolling fitted / calibrated (mm) "
-        "| predicted (mm) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
+        "| predicted (mm) | rails: fit / predicted |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for label, pre, fit, model in ladder:
         p, r, c = rec(model, "preset"), rec(model, "rolling_only"), rec(model, "calibrated")
-        lines.append("| %s | %.3g us | %s us | %s / %s | %s %% | %s %% | %s / %s / %s | %s |" % (
+        lines.append("| %s | %.3g us | %s us | %s / %s | %s %% | %s %% | %s / %s / %s | %s "
+                     "| %.0f %% / %.0f %% |" % (
             label, float(pre["cpu_ns"]) / 1000.0, c["cpu_us"], pre["angle_rms_deg"],
             fit["angle_rms_deg"], fit["speed_rms_pct"], fit["spin_rms_pct"], p["fit_mm"],
-            r["fit_mm"], c["fit_mm"], c["predict_final_mm"]))
+            r["fit_mm"], c["fit_mm"], c["predict_final_mm"], 100 * float(c["fit_rails"]),
+            100 * float(c["predict_rails"])))
     text = PAGE.replace("@MACHINE@", machine_name()).replace("@TABLE@", "\n".join(lines))
     with open(args.output, "w") as f:
         f.write(text)

@@ -781,6 +781,125 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   return report;
 }
 
+Rail NearestRail(const TableSpec& spec, const Eigen::Vector2d& xy) {
+  const double gap[4] = {spec.length_m / 2 - xy.x(), spec.length_m / 2 + xy.x(),
+                         spec.width_m / 2 - xy.y(), spec.width_m / 2 + xy.y()};
+  return static_cast<Rail>(std::min_element(gap, gap + 4) - gap);
+}
+
+namespace {
+
+// Least-squares line through (t, y): its slope, and the spread of t (sum of squares about
+// its mean: the slope's standard error is the noise over its square root).
+struct LineFit {
+  double slope = 0.0, sxx = 0.0;
+  int n = 0;
+};
+LineFit FitLine(std::span<const double> t, std::span<const double> y) {
+  LineFit f;
+  f.n = static_cast<int>(t.size());
+  if (f.n < 2) return f;
+  double mt = 0.0, my = 0.0;
+  for (int i = 0; i < f.n; ++i) {
+    mt += t[static_cast<size_t>(i)];
+    my += y[static_cast<size_t>(i)];
+  }
+  mt /= f.n;
+  my /= f.n;
+  double sxy = 0.0;
+  for (int i = 0; i < f.n; ++i) {
+    const double dt = t[static_cast<size_t>(i)] - mt;
+    f.sxx += dt * dt;
+    sxy += dt * (y[static_cast<size_t>(i)] - my);
+  }
+  if (f.sxx <= 0.0) return f;
+  f.slope = sxy / f.sxx;
+  return f;
+}
+
+}  // namespace
+
+std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recording, int ball,
+                               double near_m, double window_s, double z) {
+  // The ball's positions in time order, from where it stood.
+  if (ball < 0 || ball >= static_cast<int>(recording.initial.balls.size())) return {};
+  std::vector<double> t = {0.0};
+  std::vector<Eigen::Vector2d> p = {recording.initial.balls[static_cast<size_t>(ball)].r.head<2>()};
+  for (const TrackPoint& q : recording.track) {
+    if (q.ball != ball) continue;
+    t.push_back(q.t_s);
+    p.push_back(q.xy);
+  }
+  const TableSpec& spec = model.spec();
+  const double reach = model.cushion_contact_distance();
+  std::vector<std::pair<int, int>> bounces;  // (sample, rail)
+  const int n = static_cast<int>(p.size());
+  // The tracker's noise: second differences of the positions are mostly noise (a ball's
+  // acceleration moves them by a millimetre at most, and only while it slides), so their
+  // median absolute value, over sqrt(6) and the normal distribution's 0.6745, estimates it.
+  std::vector<double> d2;
+  for (int j = 2; j + 1 < n; ++j) {
+    const Eigen::Vector2d dd = p[static_cast<size_t>(j + 1)] - 2 * p[static_cast<size_t>(j)] +
+                               p[static_cast<size_t>(j - 1)];
+    d2.push_back(std::abs(dd.x()));
+    d2.push_back(std::abs(dd.y()));
+  }
+  double sigma = 1e-5;
+  if (!d2.empty()) {
+    std::nth_element(d2.begin(), d2.begin() + static_cast<long>(d2.size() / 2), d2.end());
+    sigma = std::max(sigma, d2[d2.size() / 2] / (0.6745 * std::sqrt(6.0)));
+  }
+  std::vector<double> gap(static_cast<size_t>(n));
+  for (int r = 0; r < 4; ++r) {
+    // The ball's distance from rail r's line, sample by sample.
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector2d& q = p[static_cast<size_t>(j)];
+      gap[static_cast<size_t>(j)] = r == 0   ? spec.length_m / 2 - q.x()
+                                    : r == 1 ? spec.length_m / 2 + q.x()
+                                    : r == 2 ? spec.width_m / 2 - q.y()
+                                             : spec.width_m / 2 + q.y();
+    }
+    for (int k = 1; k + 1 < n; ++k) {
+      const size_t uk = static_cast<size_t>(k);
+      // The sample nearest a bounce is within half a step of the contact (more, for a fast
+      // ball), and the least distance within the window (the first of equal ones).
+      const double step = std::max((p[uk] - p[uk - 1]).norm(), (p[uk + 1] - p[uk]).norm());
+      if (gap[uk] > reach + std::max(near_m, 0.6 * step)) continue;
+      int lo = k, hi = k;
+      while (lo > 0 && t[uk] - t[static_cast<size_t>(lo - 1)] <= window_s) --lo;
+      while (hi + 1 < n && t[static_cast<size_t>(hi + 1)] - t[uk] <= window_s) ++hi;
+      bool least = true;
+      for (int j = lo; j <= hi && least; ++j) {
+        least = j < k ? gap[static_cast<size_t>(j)] > gap[uk] : gap[static_cast<size_t>(j)] >= gap[uk];
+      }
+      if (!least || k - lo < 2 || hi - k < 2) continue;
+      // Coming in, then going out: the distance's trend before and after, each a line fitted
+      // by least squares, significant against the tracker's noise, so a resting or
+      // sliding-along ball seen through noise is not a bounce.
+      const std::span<const double> ts(t), gs(gap);
+      const LineFit in = FitLine(ts.subspan(static_cast<size_t>(lo), uk - static_cast<size_t>(lo) + 1),
+                                 gs.subspan(static_cast<size_t>(lo), uk - static_cast<size_t>(lo) + 1));
+      const LineFit outf = FitLine(ts.subspan(uk, static_cast<size_t>(hi - k) + 1),
+                                   gs.subspan(uk, static_cast<size_t>(hi - k) + 1));
+      if (-in.slope > z * sigma / std::sqrt(in.sxx) && outf.slope > z * sigma / std::sqrt(outf.sxx)) {
+        bounces.emplace_back(k, r);
+      }
+    }
+  }
+  std::sort(bounces.begin(), bounces.end());
+  std::vector<Rail> out;
+  for (const auto& [k, r] : bounces) out.push_back(static_cast<Rail>(r));
+  return out;
+}
+
+std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> events, int ball) {
+  std::vector<Rail> out;
+  for (const Event& e : events) {
+    if (e.kind == EventKind::kBallCushion && e.a == ball) out.push_back(NearestRail(spec, e.ra));
+  }
+  return out;
+}
+
 absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,
                                              const TableState& initial, int cue,
                                              const CueStrike& strike,

@@ -161,6 +161,28 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
                                             std::span<const Recording> recordings,
                                             const CalibrationOptions& options);
 
+/// The rails of a rectangular playing area: the side x = +length/2, x = -length/2, y = +width/2,
+/// y = -width/2.
+enum class Rail { kPlusX = 0, kMinusX = 1, kPlusY = 2, kMinusY = 3 };
+
+/// The rail nearest a point of the table (the side whose line is closest).
+Rail NearestRail(const TableSpec& spec, const Eigen::Vector2d& xy);
+
+/// The rails ball `ball` meets in a recording, in order, read from its track alone (a
+/// model-free reference for a recorded shot's cushion sequence): a bounce is a sample whose
+/// distance from a rail is the least within `window_s` on each side and within `near_m` (or
+/// 0.6 of the step to its neighbours, for a fast ball) of the contact distance, where the
+/// distance falls before it and rises after it, each trend a least-squares line over the
+/// window, significant at `z` standard errors of the tracker's noise (estimated from the
+/// track's second differences), so a resting or sliding-along ball seen through noise is not
+/// a bounce.
+std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recording, int ball,
+                               double near_m = 0.03, double window_s = 0.3, double z = 4.0);
+
+/// The rails ball `ball` meets in a simulated shot's events, in order: each of its cushion
+/// events as the rail nearest where it happened.
+std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> events, int ball);
+
 /// A synthetic recording: `strike` played on `initial` under `model`, every ball on the table
 /// tracked at `rate_hz` from the strike until all rest (at most max_s), each coordinate with
 /// Gaussian noise of sigma noise_m (seeded; 0: exact). The strike is kept in the recording
