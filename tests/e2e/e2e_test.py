@@ -1552,7 +1552,9 @@ class CalibrateAgainstServer(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        # Recorded shots are larger than the requests a server takes by default (64 KiB).
+        # Recorded shots are larger than the requests a server takes by default (64 KiB): the
+        # CLI uploads them in parts, and `small` (the default) must give what `server`, which
+        # would take them in one message, gives.
         cls.server = ServerProcess(SERVER, "--max_request_bytes", str(8 << 20))
         cls.small = ServerProcess(SERVER)
         cls.dir = tempfile.TemporaryDirectory()

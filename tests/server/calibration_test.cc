@@ -34,8 +34,9 @@ class CalibrationTest : public ::testing::Test {
  protected:
   void SetUp() override {
     config_.listen = "127.0.0.1:0";
-    // Recorded shots are larger than the requests the server takes by default (64 KiB): an
-    // operator who calibrates raises --max_request_bytes.
+    // Recorded shots are larger than the requests the server takes by default (64 KiB):
+    // CalibrateTable, the whole request in one message, needs --max_request_bytes raised
+    // (UploadCalibration does not; its tests set the default back).
     config_.max_receive_message_bytes = 8 << 20;
     // A calibration takes seconds of CPU (ten times more under the sanitizers): more than a
     // request's default budget.
