@@ -164,7 +164,7 @@ std::vector<Recording> FromPath(const std::string& path, const TableModel& model
 // (-length/2, -width/2): where each ball stood at t = 0, then its track.
 bool WriteShotSet(const std::string& path, const TableSpec& spec, const std::vector<Recording>& recs) {
   std::ofstream out(path);
-  const Eigen::Vector2d corner(-spec.length_m / 2, -spec.width_m / 2);
+  const TrackFrame mm_from_corner = TrackFrameOn(spec, /*from_corner=*/true, 1e-3);
   out << "[";
   for (size_t i = 0; i < recs.size(); ++i) {
     const Recording& r = recs[i];
@@ -172,7 +172,7 @@ bool WriteShotSet(const std::string& path, const TableSpec& spec, const std::vec
     for (size_t b = 0; b < r.initial.balls.size(); ++b) {
       std::string t = "0", x, y;
       auto add = [&](const Eigen::Vector2d& xy) {
-        const Eigen::Vector2d mm = 1e3 * (xy - corner);
+        const Eigen::Vector2d mm = (xy - mm_from_corner.origin) / mm_from_corner.scale;
         char buf[64];
         std::snprintf(buf, sizeof buf, "%.17g", mm.x());
         x += (x.empty() ? "" : ", ") + std::string(buf);
@@ -346,13 +346,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "--preset: %s\n", std::string(spec.status().message()).c_str());
       return 2;
     }
-    TrackFrame frame{.scale = scale, .table_m = Eigen::Vector2d(spec->length_m, spec->width_m)};
-    if (origin == "corner") {
-      frame.origin = Eigen::Vector2d(-spec->length_m / 2, -spec->width_m / 2);
-    } else if (origin != "centre") {
+    if (origin != "centre" && origin != "corner") {
       std::fprintf(stderr, "--track-origin: centre or corner\n");
       return 2;
     }
+    const TrackFrame frame = TrackFrameOn(*spec, origin == "corner", scale);
     if (absl::Status s = ValidateTrackFrame(frame); !s.ok()) {
       std::fprintf(stderr, "--track-scale: %s\n", std::string(s.message()).c_str());
       return 2;

@@ -703,19 +703,19 @@ namespace {
 // The frame of the calibration's track files (--track-origin, --track-scale) on `preset`'s
 // table; an error message for a bad flag.
 absl::StatusOr<billiards::TrackFrame> TrackFrameFromFlags(const std::string& preset) {
-  billiards::TrackFrame frame;
-  if (const auto s = absl::GetFlag(FLAGS_track_scale)) frame.scale = *s;
-  // The playing area, for a corner origin and for files measuring in fractions of it (an
-  // unknown preset is left to the server to refuse).
+  const std::string origin = absl::GetFlag(FLAGS_track_origin);
+  if (origin != "centre" && origin != "corner") {
+    return absl::InvalidArgumentError("--track-origin: centre or corner, got '" + origin + "'");
+  }
+  billiards::TrackFrame frame{.scale = absl::GetFlag(FLAGS_track_scale).value_or(1.0)};
+  // On the preset's playing area, for a corner origin and for files measuring in fractions
+  // of it (an unknown preset is left to the server to refuse, unless the corner needs it).
   absl::StatusOr<billiards::TableSpec> spec =
       billiards::MakeTablePreset(preset.empty() ? "pool-9ft" : preset);
-  if (spec.ok()) frame.table_m = Eigen::Vector2d(spec->length_m, spec->width_m);
-  const std::string origin = absl::GetFlag(FLAGS_track_origin);
-  if (origin == "corner") {
-    if (!spec.ok()) return absl::InvalidArgumentError("--table: " + std::string(spec.status().message()));
-    frame.origin = -frame.table_m / 2;
-  } else if (origin != "centre") {
-    return absl::InvalidArgumentError("--track-origin: centre or corner, got '" + origin + "'");
+  if (spec.ok()) {
+    frame = billiards::TrackFrameOn(*spec, origin == "corner", frame.scale);
+  } else if (origin == "corner") {
+    return absl::InvalidArgumentError("--table: " + std::string(spec.status().message()));
   }
   if (absl::Status s = billiards::ValidateTrackFrame(frame); !s.ok()) {
     return absl::InvalidArgumentError("--track-scale: " + std::string(s.message()));

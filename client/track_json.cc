@@ -19,8 +19,9 @@ namespace {
 
 // The first of a key's names that the object has, or null.
 const google::protobuf::Value* Field(const google::protobuf::Struct& o, const char* a,
-                                     const char* b) {
+                                     const char* b = nullptr) {
   if (auto it = o.fields().find(a); it != o.fields().end()) return &it->second;
+  if (b == nullptr) return nullptr;
   if (auto it = o.fields().find(b); it != o.fields().end()) return &it->second;
   return nullptr;
 }
@@ -155,7 +156,7 @@ absl::StatusOr<std::vector<NamedTrack>> FromShotArray(const google::protobuf::Li
     } else {
       track.name = std::to_string(i);
     }
-    const google::protobuf::Value* balls = Field(shot, "balls", "balls");
+    const google::protobuf::Value* balls = Field(shot, "balls");
     if (balls == nullptr || !balls->has_struct_value() || balls->struct_value().fields().empty()) {
       return fail("no balls (an object of ball ids to their samples)");
     }
@@ -227,9 +228,9 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
         "corner): give no origin or scale");
   }
   const billiards::TrackFrame corner{.origin = -frame.table_m / 2};
-  const google::protobuf::Value* match = Field(doc, "Match", "Match");
+  const google::protobuf::Value* match = Field(doc, "Match");
   const google::protobuf::Value* sets =
-      match != nullptr && match->has_struct_value() ? Field(match->struct_value(), "Sets", "Sets")
+      match != nullptr && match->has_struct_value() ? Field(match->struct_value(), "Sets")
                                                     : nullptr;
   if (sets == nullptr || !sets->has_list_value()) {
     return absl::InvalidArgumentError("Match.Sets: must be an array of sets");
@@ -240,7 +241,7 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
     const google::protobuf::Value& set = sets->list_value().values(s);
     const std::string set_path = absl::StrFormat("Match.Sets[%d]", s);
     const google::protobuf::Value* entries =
-        set.has_struct_value() ? Field(set.struct_value(), "Entries", "Entries") : nullptr;
+        set.has_struct_value() ? Field(set.struct_value(), "Entries") : nullptr;
     if (entries == nullptr) continue;  // a set without shots
     if (!entries->has_list_value()) {
       return absl::InvalidArgumentError(set_path + ".Entries: must be an array");
@@ -249,11 +250,9 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
       const google::protobuf::Value& entry = entries->list_value().values(e);
       const std::string path = absl::StrFormat("%s.Entries[%d]", set_path, e);
       if (!entry.has_struct_value()) return absl::InvalidArgumentError(path + ": must be an object");
-      const google::protobuf::Value* tracking =
-          Field(entry.struct_value(), "PathTracking", "PathTracking");
+      const google::protobuf::Value* tracking = Field(entry.struct_value(), "PathTracking");
       if (tracking == nullptr || !tracking->has_struct_value()) continue;  // not tracked
-      const google::protobuf::Value* data =
-          Field(tracking->struct_value(), "DataSets", "DataSets");
+      const google::protobuf::Value* data = Field(tracking->struct_value(), "DataSets");
       if (data == nullptr || !data->has_list_value() || data->list_value().values_size() == 0) {
         continue;
       }
@@ -262,7 +261,7 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
       }
       NamedTrack track;
       if (const google::protobuf::Value* id =
-              Field(entry.struct_value(), "PathTrackingId", "PathTrackingId")) {
+              Field(entry.struct_value(), "PathTrackingId")) {
         const std::optional<std::string> name = IdOf(*id);
         if (!name) {
           return absl::InvalidArgumentError(path + ".PathTrackingId: must be a string or a whole number");
@@ -281,7 +280,7 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
           return absl::InvalidArgumentError(ds_path + what);
         };
         if (!ds.has_struct_value()) return fail(": must be an object");
-        const google::protobuf::Value* color = Field(ds.struct_value(), "BallColor", "BallColor");
+        const google::protobuf::Value* color = Field(ds.struct_value(), "BallColor");
         const std::optional<std::string> ball =
             color != nullptr && color->has_number_value() ? IdOf(*color) : std::nullopt;
         if (!ball) return fail(".BallColor: must be a whole number");
@@ -289,7 +288,7 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
           return fail(".BallColor: ball " + *ball + " is tracked twice in the shot");
         }
         seen.push_back(*ball);
-        const google::protobuf::Value* coords = Field(ds.struct_value(), "Coords", "Coords");
+        const google::protobuf::Value* coords = Field(ds.struct_value(), "Coords");
         if (coords == nullptr || !coords->has_list_value()) return fail(".Coords: must be an array");
         const int n = coords->list_value().values_size();
         shot_samples += n;
@@ -332,7 +331,7 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
 absl::StatusOr<std::vector<NamedTrack>> FromDocument(const google::protobuf::Value& doc,
                                                      const billiards::TrackFrame& frame) {
   if (doc.has_list_value()) return FromShotArray(doc.list_value(), frame);
-  if (doc.has_struct_value() && Field(doc.struct_value(), "Match", "Match") != nullptr) {
+  if (doc.has_struct_value() && Field(doc.struct_value(), "Match") != nullptr) {
     return FromMatchTracking(doc.struct_value(), frame);
   }
   return absl::InvalidArgumentError(
@@ -362,7 +361,7 @@ absl::StatusOr<std::vector<NamedTrack>> ParseTracks(std::string_view text,
     // with '{' is JSON lines (a one-line file of them is a JSON object too).
     google::protobuf::Value doc;
     if (google::protobuf::util::JsonStringToMessage(std::string(text), &doc).ok() &&
-        doc.has_struct_value() && Field(doc.struct_value(), "Match", "Match") != nullptr) {
+        doc.has_struct_value() && Field(doc.struct_value(), "Match") != nullptr) {
       if (absl::Status s = billiards::ValidateTrackFrame(frame); !s.ok()) return s;
       return FromDocument(doc, frame);
     }

@@ -781,10 +781,27 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   return report;
 }
 
+namespace {
+
+// How far a point is from a rail's line, towards the table's inside.
+double RailGap(const TableSpec& spec, int rail, const Eigen::Vector2d& xy) {
+  switch (static_cast<Rail>(rail)) {
+    case Rail::kPlusX: return spec.length_m / 2 - xy.x();
+    case Rail::kMinusX: return spec.length_m / 2 + xy.x();
+    case Rail::kPlusY: return spec.width_m / 2 - xy.y();
+    case Rail::kMinusY: break;
+  }
+  return spec.width_m / 2 + xy.y();
+}
+
+}  // namespace
+
 Rail NearestRail(const TableSpec& spec, const Eigen::Vector2d& xy) {
-  const double gap[4] = {spec.length_m / 2 - xy.x(), spec.length_m / 2 + xy.x(),
-                         spec.width_m / 2 - xy.y(), spec.width_m / 2 + xy.y()};
-  return static_cast<Rail>(std::min_element(gap, gap + 4) - gap);
+  int nearest = 0;
+  for (int r = 1; r < 4; ++r) {
+    if (RailGap(spec, r, xy) < RailGap(spec, nearest, xy)) nearest = r;
+  }
+  return static_cast<Rail>(nearest);
 }
 
 namespace {
@@ -844,20 +861,12 @@ std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recordi
     d2.push_back(std::abs(dd.x()));
     d2.push_back(std::abs(dd.y()));
   }
-  double sigma = 1e-5;
-  if (!d2.empty()) {
-    std::nth_element(d2.begin(), d2.begin() + static_cast<long>(d2.size() / 2), d2.end());
-    sigma = std::max(sigma, d2[d2.size() / 2] / (0.6745 * std::sqrt(6.0)));
-  }
+  const double sigma = std::max(1e-5, Median(std::move(d2)) / (0.6745 * std::sqrt(6.0)));
   std::vector<double> gap(static_cast<size_t>(n));
   for (int r = 0; r < 4; ++r) {
     // The ball's distance from rail r's line, sample by sample.
     for (int j = 0; j < n; ++j) {
-      const Eigen::Vector2d& q = p[static_cast<size_t>(j)];
-      gap[static_cast<size_t>(j)] = r == 0   ? spec.length_m / 2 - q.x()
-                                    : r == 1 ? spec.length_m / 2 + q.x()
-                                    : r == 2 ? spec.width_m / 2 - q.y()
-                                             : spec.width_m / 2 + q.y();
+      gap[static_cast<size_t>(j)] = RailGap(spec, r, p[static_cast<size_t>(j)]);
     }
     for (int k = 1; k + 1 < n; ++k) {
       const size_t uk = static_cast<size_t>(k);

@@ -40,6 +40,12 @@ std::optional<double> Number(std::string_view s) {
 
 }  // namespace
 
+TrackFrame TrackFrameOn(const TableSpec& spec, bool from_corner, double scale) {
+  TrackFrame frame{.scale = scale, .table_m = Eigen::Vector2d(spec.length_m, spec.width_m)};
+  if (from_corner) frame.origin = -frame.table_m / 2;
+  return frame;
+}
+
 absl::Status ValidateTrackFrame(const TrackFrame& frame) {
   if (!std::isfinite(frame.scale) || frame.scale <= 0.0 || frame.scale > 1e6) {
     return absl::InvalidArgumentError(

@@ -26,6 +26,7 @@
 #include "absl/status/status.h"
 #include "absl/status/statusor.h"
 #include "sim/billiards/calibrate.h"
+#include "sim/billiards/model.h"
 
 namespace sportsim::billiards {
 
@@ -49,6 +50,11 @@ struct TrackFrame {
   /// match-tracking document, client/track_json.h); zero: not given.
   Eigen::Vector2d table_m = Eigen::Vector2d::Zero();
 };
+
+/// The frame of files on `spec`'s table (its playing area as table_m) whose unit is `scale`
+/// metres and whose (0, 0) is the table's centre, or with `from_corner` its corner
+/// (-length/2, -width/2), x along the length. Not validated (ValidateTrackFrame).
+TrackFrame TrackFrameOn(const TableSpec& spec, bool from_corner, double scale);
 
 /// InvalidArgument naming the field for a scale that is not finite and in (0, 1e6], an
 /// origin that is not finite and within 1e6 m, or a table size that is not finite and in
