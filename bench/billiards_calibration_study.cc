@@ -6,7 +6,9 @@
 //    the carom geometry with Mathavan et al.'s measured cushion (restitution 0.98, friction
 //    0.14, their model) and heated-cloth constants (rolling resistance 0.006, sliding 0.2,
 //    spin-down 10 rad/s^2), random layouts and strikes, tracked at 50 Hz with 1 mm Gaussian
-//    noise like a camera tracker. What a model loses here is model error plus noise.
+//    noise like a camera tracker, whose clock starts 0.1 to 0.5 s before the strike (the
+//    strike's time is fitted, as a recorded shot's is). What a model loses here is model error
+//    plus noise.
 //  - --recordings PATH: a track file or a shot set (client/track_json.h: CSV or JSON lines of
 //    t, ball, x, y, as `shot simulate --format csv` writes; a JSON array of many shots; or a
 //    match tracker's export), or
@@ -25,7 +27,7 @@
 //    between tracked and simulated centres (every ball, every frame);
 //  - rails: the share of shots whose struck ball meets the rails the recording shows, in the
 //    same order (the first three; the recording's read from its track alone, TrackedRails);
-//  - predict: the strike fitted on the first 0.4 s only, the median distance of the struck
+//  - predict: the strike fitted on the first 0.4 s after it only, the median distance of the struck
 //    ball's final position from where it was last tracked, and the share of shots whose struck
 //    ball meets the recorded rails (as above);
 //  - cpu: the median thread CPU of one shot's simulation (its strike as fitted).
@@ -77,6 +79,7 @@ std::vector<Recording> Synthetic(int n, uint64_t seed) {
   const TableModel truth = *TableModel::Create(ReferenceTable());
   const double l = truth.spec().length_m, w = truth.spec().width_m, d = 2 * truth.radius();
   std::mt19937_64 rng(seed);
+  std::mt19937_64 clock_rng(seed + 1);  // the trackers' clocks, apart from the shots
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Recording> out;
   while (static_cast<int>(out.size()) < n) {
@@ -95,9 +98,15 @@ std::vector<Recording> Synthetic(int n, uint64_t seed) {
     c.phi_rad = std::atan2(to.y(), to.x()) + (u(rng) - 0.5) * 0.5;
     c.a = 0.6 * (u(rng) - 0.5);
     c.b = 0.6 * (u(rng) - 0.5);
+    // A tracker's clock: started 0.1 to 0.5 s before the strike, whose time is not known.
+    const double strike_time = 0.1 + 0.4 * u(clock_rng);
     absl::StatusOr<Recording> r = SyntheticRecording(
         truth, SolverOptions{}, s, 0, c,
-        SyntheticOptions{.rate_hz = 50, .noise_m = 1e-3, .seed = seed + out.size()});
+        SyntheticOptions{.rate_hz = 50,
+                         .noise_m = 1e-3,
+                         .seed = seed + out.size(),
+                         .strike_time_s = strike_time,
+                         .keep_strike_time = false});
     if (!r.ok()) continue;
     r->name = "synthetic" + std::to_string(out.size());
     out.push_back(*std::move(r));
@@ -143,6 +152,7 @@ std::vector<Recording> FromPath(const std::string& path, const TableModel& model
       }
       r.cue = t.file.cue;
       r.track = t.file.points;
+      r.strike_time_s.reset();  // a tracker's clock: fitted
       if (absl::Status s = ValidateRecording(model, r); !s.ok()) {
         std::fprintf(stderr, "%s: skipped: %s\n", r.name.c_str(), std::string(s.message()).c_str());
         continue;

@@ -57,11 +57,26 @@ int PointsUntil(const Recording& rec, double until_s) {
                           rec.track.begin());
 }
 
+// A strike and when it happened on the track's clock.
+struct TimedStrike {
+  CueStrike strike;
+  double time_s = 0.0;
+};
+
 // Plays `strike` on the recording's table and writes the first `n` points' residuals (the
-// simulated centre minus the tracked position, times `weight`) into out[0 .. 2n).
+// simulated centre minus the tracked position, times `weight`) into out[0 .. 2n). Before the
+// strike's time every ball is where it stood.
 absl::Status ShotResiduals(const TableModel& model, const SolverOptions& solver,
-                           const Recording& rec, const CueStrike& strike, int n, double weight,
+                           const Recording& rec, const TimedStrike& timed, int n, double weight,
                            double* out) {
+  const CueStrike& strike = timed.strike;
+  int i = 0;
+  for (; i < n && rec.track[static_cast<size_t>(i)].t_s < timed.time_s; ++i) {
+    const TrackPoint& p = rec.track[static_cast<size_t>(i)];
+    const Eigen::Vector3d& r = rec.initial.balls[static_cast<size_t>(p.ball)].r;
+    out[2 * i] = weight * (r.x() - p.xy.x());
+    out[2 * i + 1] = weight * (r.y() - p.xy.y());
+  }
   TableState state = rec.initial;
   absl::StatusOr<StrikeOutcome> struck = ApplyStrike(model, solver.effects, strike, rec.cue, &state);
   if (!struck.ok()) return struck.status();
@@ -69,11 +84,12 @@ absl::Status ShotResiduals(const TableModel& model, const SolverOptions& solver,
   absl::StatusOr<std::unique_ptr<TableSimulation>> sim =
       TableSimulation::Create(model, solver, std::move(state), &events);
   if (!sim.ok()) return sim.status();
-  for (int i = 0; i < n; ++i) {
+  for (; i < n; ++i) {
     const TrackPoint& p = rec.track[static_cast<size_t>(i)];
-    if (p.t_s > (*sim)->time()) {
+    const double t = p.t_s - timed.time_s;
+    if (t > (*sim)->time()) {
       events.clear();
-      if (absl::Status s = (*sim)->AdvanceTo(p.t_s, &events); !s.ok()) return s;
+      if (absl::Status s = (*sim)->AdvanceTo(t, &events); !s.ok()) return s;
     }
     const Eigen::Vector3d& r = (*sim)->state().balls[static_cast<size_t>(p.ball)].r;
     out[2 * i] = weight * (r.x() - p.xy.x());
@@ -124,16 +140,110 @@ class Budget {
   const std::function<bool()>* cancelled_;
 };
 
+// When a recording's strike happened on its track's clock: known, or fitted within
+// [lo, hi] from t0. The bounds and the start are read from the cue ball's track alone (no
+// model): the strike comes before the first point a centimetre away from the spot, and after
+// the point before the last one still on the spot (not the last itself: a ball struck just
+// before it is still within the tracker's noise of its spot there), and the first two points
+// away from it, extrapolated back to the spot at their speed, say when.
+struct StrikeClock {
+  bool fitted = false;
+  double lo = 0.0, hi = 0.0, t0 = 0.0;
+  double frame_s = 0.0;  // the tracker's interval between the cue ball's first points away
+  // This clock narrowed to a tenth of a frame on either side of t (where the first motion put
+  // the strike), within its bounds: where a fit over the whole shot may move the time. Over
+  // the whole shot the time is barely seen (a few points of the first motion among
+  // thousands) and trades against the speed and the spin: left free it drifts by many
+  // milliseconds for a hair's better score, with the strike wrong.
+  StrikeClock Around(double t) const {
+    if (!fitted) return *this;
+    StrikeClock c = *this;
+    const double w = 0.1 * frame_s;
+    c.lo = std::max(lo, t - w);
+    c.hi = std::min(hi, t + w);
+    c.t0 = std::clamp(t, c.lo, c.hi);
+    c.fitted = c.hi - c.lo > 1e-9;
+    return c;
+  }
+};
+// A cue ball point this close to its spot is taken as still there (a tracker's noise).
+constexpr double kOnSpot = 0.003;
+// A cue ball this far from its spot has been struck.
+constexpr double kStruckDistance = 0.01;
+StrikeClock ClockOf(const TableModel& model, const Recording& rec) {
+  StrikeClock c;
+  if (rec.strike_time_s) {
+    c.t0 = c.lo = c.hi = *rec.strike_time_s;
+    return c;
+  }
+  const Eigen::Vector2d spot = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
+  const TrackPoint* first = nullptr;   // the first cue ball point away from its spot
+  const TrackPoint* second = nullptr;  // the cue ball's point after it
+  double previous = 0.0;               // the cue ball's last point's time
+  for (const TrackPoint& p : rec.track) {
+    if (p.ball != rec.cue) continue;
+    if (first != nullptr) {
+      second = &p;
+      break;
+    }
+    if ((p.xy - spot).norm() >= kStruckDistance) {
+      first = &p;
+    } else if ((p.xy - spot).norm() <= kOnSpot) {
+      c.lo = previous;
+    }
+    previous = p.t_s;
+  }
+  if (first == nullptr) return c;  // never struck: FitStrike says so
+  c.hi = first->t_s;
+  c.fitted = c.hi - c.lo > 1e-9;  // else it is known to be there
+  c.t0 = 0.5 * (c.lo + c.hi);
+  if (second != nullptr && second->t_s > first->t_s) {
+    // The speed at the first point: the mean speed to the second, with the sliding friction's
+    // loss over half the interval added back.
+    const double dt = second->t_s - first->t_s;
+    c.frame_s = dt;
+    const double v = (second->xy - first->xy).norm() / dt +
+                     0.5 * model.params().mu_slide * model.params().gravity_mps2 * dt;
+    if (v > 0.0) c.t0 = first->t_s - (first->xy - spot).norm() / v;
+  }
+  // Inside the interval, off its ends (where the fit's map is flat).
+  const double margin = 0.02 * (c.hi - c.lo);
+  c.t0 = std::clamp(c.t0, c.lo + margin, c.hi - margin);
+  return c;
+}
+
 // A strike's unbounded coordinates: the cue ball's speed (logistic onto its bounds), its
-// heading, the two tip offsets and (when fitted) the elevation. An offset is the limit times
-// the sine of its coordinate (periodic: a fit never stalls against a bound, as it can on a
-// logistic map's flat tails), and a pair outside the miscue circle is scaled back onto it.
+// heading, the two tip offsets, (when fitted) the elevation and (when fitted) the strike's
+// time. An offset is the limit times the sine of its coordinate, and the time the clock's
+// interval's middle plus its half-width times a sine (periodic: a fit never stalls against a
+// bound, as it can on a logistic map's flat tails); a pair of offsets outside the miscue
+// circle is scaled back onto it.
 struct StrikeMap {
   StrikeBounds bounds;
   double offset_limit = 0.5;  // just inside the miscue limit
+  StrikeClock clock;
 
-  int size() const { return bounds.fit_elevation ? 5 : 4; }
+  int size() const { return (bounds.fit_elevation ? 5 : 4) + (clock.fitted ? 1 : 0); }
   double max_theta() const { return bounds.max_elevation_deg * std::numbers::pi / 180.0; }
+  TimedStrike ToTimed(const double* u) const {
+    TimedStrike t{ToStrike(u), clock.t0};
+    if (clock.fitted) t.time_s = mid() + half() * std::sin(u[size() - 1]);
+    return t;
+  }
+  // This map with the strike's time held at t.
+  StrikeMap HeldAt(double t) const {
+    StrikeMap m = *this;
+    m.clock = StrikeClock{.fitted = false, .lo = t, .hi = t, .t0 = t};
+    return m;
+  }
+  void FromTimed(const TimedStrike& t, double* u) const {
+    FromStrike(t.strike, u);
+    if (clock.fitted) u[size() - 1] = std::asin(std::clamp((t.time_s - mid()) / half(), -1.0, 1.0));
+  }
+
+ private:
+  double mid() const { return 0.5 * (clock.lo + clock.hi); }
+  double half() const { return 0.5 * (clock.hi - clock.lo); }
   CueStrike ToStrike(const double* u) const {
     CueStrike s;
     s.ball_speed = true;
@@ -161,15 +271,17 @@ struct StrikeMap {
 };
 
 // The cue ball's first tracked motion: its heading from where it stood to the first point a
-// centimetre away, and its speed there with the sliding friction's loss added back. nullopt
-// when the cue ball's track never leaves its spot.
-std::optional<std::pair<double, double>> FirstMotion(const TableModel& model, const Recording& rec) {
+// centimetre away, and its mean speed since the strike (at the clock's start) with the
+// sliding friction's loss added back. nullopt when the cue ball's track never leaves its spot.
+std::optional<std::pair<double, double>> FirstMotion(const TableModel& model, const Recording& rec,
+                                                     const StrikeClock& clock) {
   const Eigen::Vector2d start = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
   for (const TrackPoint& p : rec.track) {
-    if (p.ball != rec.cue || p.t_s <= 0.0) continue;
+    const double dt = p.t_s - clock.t0;
+    if (p.ball != rec.cue || dt <= 0.0) continue;
     const Eigen::Vector2d d = p.xy - start;
-    if (d.norm() < 0.01) continue;
-    const double speed = d.norm() / p.t_s + 0.5 * model.params().mu_slide * model.params().gravity_mps2 * p.t_s;
+    if (d.norm() < kStruckDistance) continue;
+    const double speed = d.norm() / dt + 0.5 * model.params().mu_slide * model.params().gravity_mps2 * dt;
     return std::make_pair(std::atan2(d.y(), d.x()), speed);
   }
   return std::nullopt;
@@ -240,7 +352,7 @@ ShotPoints PointsOf(const Recording& rec, double until_s) {
 // Residuals of one shot, with a failed simulation's large ones in place of an error (budget and
 // cancellation errors pass through).
 absl::Status Simulate(const TableModel& model, const SolverOptions& solver, const Recording& rec,
-                      const CueStrike& strike, const ShotPoints& pts, Budget* budget, double* out) {
+                      const TimedStrike& strike, const ShotPoints& pts, Budget* budget, double* out) {
   if (absl::Status s = budget->Take(); !s.ok()) return s;
   if (!ShotResiduals(model, solver, rec, strike, pts.n, pts.weight, out).ok()) {
     std::fill(out, out + 2 * pts.n, kFailedResidual * pts.weight);
@@ -248,15 +360,16 @@ absl::Status Simulate(const TableModel& model, const SolverOptions& solver, cons
   return absl::OkStatus();
 }
 
-// The windows a strike is fitted over in turn: the first 0.25 s of the track, doubled until
-// the whole window. A shot's collisions make the score rugged in the strike (a slightly other
-// heading misses a ball): fitted on its first motion only, before the first collisions, the
-// strike is close enough that each longer window's fit starts in the right basin.
-std::vector<double> Windows(const Recording& rec, double until_s) {
-  const double end = std::min(until_s, rec.track.back().t_s);
+// The windows a strike is fitted over in turn, as times on the track's clock: the first
+// 0.25 s after the strike, doubled until the whole window (until_s after the strike). A
+// shot's collisions make the score rugged in the strike (a slightly other heading misses a
+// ball): fitted on its first motion only, before the first collisions, the strike is close
+// enough that each longer window's fit starts in the right basin.
+std::vector<double> Windows(const Recording& rec, const StrikeClock& clock, double until_s) {
+  const double end = std::min(until_s, rec.track.back().t_s - clock.t0);
   std::vector<double> w;
-  for (double t = 0.25; t < end; t *= 2.0) w.push_back(t);
-  w.push_back(until_s);
+  for (double t = 0.25; t < end; t *= 2.0) w.push_back(clock.t0 + t);
+  w.push_back(clock.t0 + until_s);
   return w;
 }
 
@@ -274,7 +387,7 @@ absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, 
   if (2 * pts.n < k) return absl::OkStatus();  // too early to say anything: keep the start
   const int extra = prior != nullptr ? 2 : 0;
   auto residuals = [&](const VectorXd& x, double* r) {
-    if (absl::Status s = Simulate(model, solver, rec, map.ToStrike(x.data()), pts, budget, r); !s.ok()) {
+    if (absl::Status s = Simulate(model, solver, rec, map.ToTimed(x.data()), pts, budget, r); !s.ok()) {
       return s;
     }
     if (prior != nullptr) {
@@ -298,18 +411,22 @@ absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, 
   return Minimize(f, u, iterations).status();
 }
 
-// FitStrike's work, on a budget.
+// FitStrike's work, on a budget. With free_time an unknown strike time is, at the end,
+// refined with the rest of the best start's strike over the whole window (the best fit under
+// this table); without, it stays where the first motion put it (for the calibration's passes,
+// in which it must not take up the table's errors).
 absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptions& solver,
                                       const Recording& rec, const StrikeBounds& bounds,
-                                      double until_s, Budget* budget) {
+                                      double until_s, Budget* budget, bool free_time) {
   StrikeFit best;
   const int64_t used0 = budget->used();
-  const ShotPoints all = PointsOf(rec, until_s);
+  const StrikeClock clock = ClockOf(model, rec);
+  const ShotPoints all = PointsOf(rec, clock.t0 + until_s);
   if (all.n == 0) return absl::InvalidArgumentError("track: no points in the fitted window");
-  StrikeMap map{bounds, 0.999 * model.params().miscue_limit};
+  StrikeMap map{bounds, 0.999 * model.params().miscue_limit, clock};
   const int k = map.size();
   if (2 * all.n < k) return absl::InvalidArgumentError("track: too few points to fit the strike");
-  const std::optional<std::pair<double, double>> motion = FirstMotion(model, rec);
+  const std::optional<std::pair<double, double>> motion = FirstMotion(model, rec, clock);
   if (!motion) {
     return absl::InvalidArgumentError("track: the cue ball's track never leaves its spot (1 cm)");
   }
@@ -321,7 +438,7 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
   for (double a : {0.0, 0.3 * l, -0.3 * l, 0.6 * l, -0.6 * l}) {
     for (double b : {0.0, 0.5 * l, -0.5 * l}) tips.emplace_back(a, b);
   }
-  const std::vector<double> windows = Windows(rec, until_s);
+  const std::vector<double> windows = Windows(rec, clock, until_s);
   double best_cost = std::numeric_limits<double>::infinity();
   for (const auto& [a, b] : tips) {
     CueStrike s0;
@@ -331,24 +448,56 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
     s0.a = a;
     s0.b = b;
     VectorXd u(k);
-    map.FromStrike(s0, u.data());
+    map.FromTimed({s0, clock.t0}, u.data());
     const VectorXd u0 = u;
+    // An unknown strike time is fitted on the first window only, the cue ball's first motion,
+    // and then held: over the whole shot it would also take up what the table's parameters
+    // get wrong (a late strike for a slow cloth), which the calibration's fit must see.
+    StrikeMap fitting = map;
     for (size_t w = 0; w < windows.size(); ++w) {
       const bool last = w + 1 == windows.size();
-      if (absl::Status s = RefineStrike(model, solver, rec, map, windows[w], last ? nullptr : &u0,
+      if (absl::Status s = RefineStrike(model, solver, rec, fitting, windows[w], last ? nullptr : &u0,
                                         kStrikeIterations, budget, &u);
           !s.ok()) {
         return s;
       }
+      if (fitting.clock.fitted) {
+        fitting = map.HeldAt(fitting.ToTimed(u.data()).time_s);
+        u.conservativeResize(fitting.size());  // the time was the last coordinate
+      }
     }
     VectorXd r(2 * all.n);
-    if (absl::Status s = Simulate(model, solver, rec, map.ToStrike(u.data()), all, budget, r.data()); !s.ok()) {
+    const TimedStrike timed = fitting.ToTimed(u.data());
+    if (absl::Status s = Simulate(model, solver, rec, timed, all, budget, r.data()); !s.ok()) {
       return s;
     }
     const double cost = r.squaredNorm();
     if (cost < best_cost) {
       best_cost = cost;
-      best.strike = map.ToStrike(u.data());
+      best.strike = timed.strike;
+      best.strike_time_s = timed.time_s;
+      for (int i = 0; i < all.n; ++i) r.segment(2 * i, 2) /= all.weight;
+      best.error = ErrorOf(r.data(), all.n);
+    }
+  }
+  StrikeMap polish = map;
+  polish.clock = clock.Around(best.strike_time_s);
+  if (free_time && polish.clock.fitted) {
+    VectorXd u(polish.size());
+    polish.FromTimed({best.strike, best.strike_time_s}, u.data());
+    if (absl::Status s = RefineStrike(model, solver, rec, polish, windows.back(), nullptr,
+                                      kStrikeIterations, budget, &u);
+        !s.ok()) {
+      return s;
+    }
+    const TimedStrike timed = polish.ToTimed(u.data());
+    VectorXd r(2 * all.n);
+    if (absl::Status s = Simulate(model, solver, rec, timed, all, budget, r.data()); !s.ok()) {
+      return s;
+    }
+    if (r.squaredNorm() < best_cost) {  // LM keeps the best point it saw: never worse but for rounding
+      best.strike = timed.strike;
+      best.strike_time_s = timed.time_s;
       for (int i = 0; i < all.n; ++i) r.segment(2 * i, 2) /= all.weight;
       best.error = ErrorOf(r.data(), all.n);
     }
@@ -390,9 +539,9 @@ absl::Status ValidateRecording(const TableModel& model, const Recording& rec) {
   double t_prev = 0.0;
   for (size_t i = 0; i < rec.track.size(); ++i) {
     const TrackPoint& p = rec.track[i];
-    if (!std::isfinite(p.t_s) || p.t_s < 0.0 || p.t_s > 3600.0) {
-      return absl::InvalidArgumentError(
-          absl::StrFormat("track[%d].t_s must be finite and in [0, 3600] s, got %g", i, p.t_s));
+    if (!(p.t_s >= 0.0 && p.t_s <= kMaxTrackTime)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "track[%d].t_s must be finite and in [0, %g] s, got %g", i, kMaxTrackTime, p.t_s));
     }
     if (p.t_s < t_prev) {
       return absl::InvalidArgumentError(absl::StrFormat(
@@ -408,20 +557,33 @@ absl::Status ValidateRecording(const TableModel& model, const Recording& rec) {
           absl::StrFormat("track[%d].xy must be finite and within 100 m", i));
     }
   }
+  if (rec.strike_time_s && !(*rec.strike_time_s >= 0.0 && *rec.strike_time_s <= kMaxTrackTime)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "strike_time_s must be finite and in [0, %g] s, got %g", kMaxTrackTime, *rec.strike_time_s));
+  }
   if (rec.strike) {
     if (absl::StatusOr<StrikeOutcome> s = ComputeStrike(model, 0, *rec.strike); !s.ok()) {
       return absl::InvalidArgumentError(absl::StrCat("strike: ", s.status().message()));
+    }
+    if (!rec.strike_time_s) {
+      return absl::InvalidArgumentError("strike_time_s: a known strike needs its time");
     }
   }
   return absl::OkStatus();
 }
 
 absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions& solver,
-                                    const Recording& rec, const CueStrike& strike, double until_s) {
+                                    const Recording& rec, const CueStrike& strike, double until_s,
+                                    std::optional<double> strike_time_s) {
   if (absl::Status s = ValidateRecording(model, rec); !s.ok()) return s;
-  const int n = PointsUntil(rec, until_s);
+  if (strike_time_s && !(*strike_time_s >= 0.0 && *strike_time_s <= kMaxTrackTime)) {
+    return absl::InvalidArgumentError(
+        absl::StrFormat("strike_time_s must be in [0, %g] s, got %g", kMaxTrackTime, *strike_time_s));
+  }
+  const TimedStrike timed{strike, strike_time_s ? *strike_time_s : ClockOf(model, rec).t0};
+  const int n = PointsUntil(rec, timed.time_s + until_s);
   std::vector<double> r(static_cast<size_t>(2 * n));
-  if (absl::Status s = ShotResiduals(model, solver, rec, strike, n, 1.0, r.data()); !s.ok()) return s;
+  if (absl::Status s = ShotResiduals(model, solver, rec, timed, n, 1.0, r.data()); !s.ok()) return s;
   return ErrorOf(r.data(), n);
 }
 
@@ -431,7 +593,7 @@ absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions
   if (absl::Status s = ValidateRecording(model, rec); !s.ok()) return s;
   if (absl::Status s = CheckOptions(bounds); !s.ok()) return s;
   Budget budget(std::numeric_limits<int64_t>::max(), nullptr);
-  return FitStrikeOn(model, solver, rec, bounds, until_s, &budget);
+  return FitStrikeOn(model, solver, rec, bounds, until_s, &budget, /*free_time=*/true);
 }
 
 std::optional<std::pair<double, double>> CalibrationRange(std::string_view name) {
@@ -560,41 +722,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   };
   CalibrationReport report;
   report.shots.resize(static_cast<size_t>(shots));
-  StrikeMap map{options.strike_bounds, 0.999 * spec.params.miscue_limit};
-
-  // 1. Every shot's strike under the starting parameters: the "before" report and the fit's
-  // starting point. Known strikes are kept.
-  std::vector<CueStrike> strikes(static_cast<size_t>(shots));
-  for (int i = 0; i < shots; ++i) {
-    const Recording& rec = recordings[static_cast<size_t>(i)];
-    ShotReport& sr = report.shots[static_cast<size_t>(i)];
-    sr.name = rec.name;
-    sr.heldout = heldout[static_cast<size_t>(i)];
-    const double window = sr.heldout ? options.strike_window_s : 1e300;
-    if (rec.strike) {
-      strikes[static_cast<size_t>(i)] = *rec.strike;
-    } else {
-      absl::StatusOr<StrikeFit> fit =
-          FitStrikeOn(*model0, solver, rec, options.strike_bounds, window, &budget);
-      if (!fit.ok()) {
-        return absl::Status(fit.status().code(),
-                            absl::StrFormat("recordings[%d]: %s", i, fit.status().message()));
-      }
-      strikes[static_cast<size_t>(i)] = fit->strike;
-    }
-    sr.strike_before = strikes[static_cast<size_t>(i)];
-    absl::StatusOr<ShotError> e = ScoreShot(*model0, solver, rec, sr.strike_before);
-    if (!e.ok()) return e.status();
-    sr.before = *e;
-    progress(0.3 * (i + 1) / shots, "strikes before");
-  }
-
-  // 2. The fit over the training shots by variable projection: LM over the table's parameters
-  // alone, each evaluation refitting every unknown strike to them first (from where it was),
-  // so the score is a function of the parameters with the strikes at their best. A joint LM
-  // over both at once stalls (one shot's strike on a kink of its own score, a graze, rejects
-  // every step of all the others), and alternating the two crawls along their coupling (a
-  // livelier cushion and a slower strike trade against each other).
+  // The shots fitted with the parameters, and their residual rows.
   std::vector<int> train;
   for (int i = 0; i < shots; ++i) {
     if (!heldout[static_cast<size_t>(i)]) train.push_back(i);
@@ -608,6 +736,73 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     row0[static_cast<size_t>(i)] = rows;
     rows += 2 * pts[static_cast<size_t>(i)].n;
   }
+  const bool joint = !train.empty() && kp > 0 && rows >= kp;
+
+  // The strikes' coordinates in the joint fit. An unknown strike time is held where the
+  // shot's first motion put it (free, it would take up what the parameters get wrong: a late
+  // strike for a slow cloth) until the parameters have settled; then a last solve frees it
+  // within a tenth of a frame of it (StrikeClock::Around), since a time off by a fraction of a millisecond biases the
+  // parameters in turn (a strike that lags is fitted faster, which a livelier cloth makes up).
+  const StrikeMap map{options.strike_bounds, 0.999 * spec.params.miscue_limit};
+  std::vector<StrikeClock> clocks;
+  bool any_clock = false;
+  for (const Recording& rec : recordings) {
+    clocks.push_back(ClockOf(*model0, rec));
+    any_clock = any_clock || (clocks.back().fitted && !rec.strike);
+  }
+  bool free_time = false;
+  std::vector<TimedStrike> strikes(static_cast<size_t>(shots));
+  auto map_of = [&](int i) {
+    if (!free_time || !clocks[static_cast<size_t>(i)].fitted) {
+      return map.HeldAt(strikes[static_cast<size_t>(i)].time_s);
+    }
+    StrikeMap m = map;
+    m.clock = clocks[static_cast<size_t>(i)];
+    return m;
+  };
+  // Frees the times, each around where it was held (StrikeClock::Around).
+  auto free_times = [&] {
+    free_time = true;
+    for (int i = 0; i < shots; ++i) {
+      clocks[static_cast<size_t>(i)] =
+          clocks[static_cast<size_t>(i)].Around(strikes[static_cast<size_t>(i)].time_s);
+    }
+  };
+
+  // 1. Every shot's strike under the starting parameters: the "before" report and the fit's
+  // starting point. Known strikes are kept.
+  for (int i = 0; i < shots; ++i) {
+    const Recording& rec = recordings[static_cast<size_t>(i)];
+    ShotReport& sr = report.shots[static_cast<size_t>(i)];
+    sr.name = rec.name;
+    sr.heldout = heldout[static_cast<size_t>(i)];
+    const double window = sr.heldout ? options.strike_window_s : 1e300;
+    if (rec.strike) {
+      strikes[static_cast<size_t>(i)] = {*rec.strike, *rec.strike_time_s};
+    } else {
+      absl::StatusOr<StrikeFit> fit = FitStrikeOn(*model0, solver, rec, options.strike_bounds,
+                                                  window, &budget, /*free_time=*/!joint || sr.heldout);
+      if (!fit.ok()) {
+        return absl::Status(fit.status().code(),
+                            absl::StrFormat("recordings[%d]: %s", i, fit.status().message()));
+      }
+      strikes[static_cast<size_t>(i)] = {fit->strike, fit->strike_time_s};
+    }
+    sr.strike_before = strikes[static_cast<size_t>(i)].strike;
+    sr.strike_time_before_s = strikes[static_cast<size_t>(i)].time_s;
+    absl::StatusOr<ShotError> e =
+        ScoreShot(*model0, solver, rec, sr.strike_before, 1e300, sr.strike_time_before_s);
+    if (!e.ok()) return e.status();
+    sr.before = *e;
+    progress(0.3 * (i + 1) / shots, "strikes before");
+  }
+
+  // 2. The fit over the training shots by variable projection: LM over the table's parameters
+  // alone, each evaluation refitting every unknown strike to them first (from where it was),
+  // so the score is a function of the parameters with the strikes at their best. A joint LM
+  // over both at once stalls (one shot's strike on a kink of its own score, a graze, rejects
+  // every step of all the others), and alternating the two crawls along their coupling (a
+  // livelier cushion and a slower strike trade against each other).
   PhysicsParams fitted_params = spec.params;
   auto model_at = [&](const VectorXd& u) -> absl::StatusOr<TableModel> {
     TableSpec ts = spec;
@@ -631,7 +826,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     }
     return absl::OkStatus();
   };
-  if (!train.empty() && kp > 0 && rows >= kp) {
+  if (joint) {
     VectorXd x(kp);
     for (int c = 0; c < kp; ++c) {
       const Fitted& fp = fitted[static_cast<size_t>(c)];
@@ -641,21 +836,22 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     // residuals: the reduced problem's residual function.
     // Each refit starts from the strikes of the last accepted point (`anchor`), never from a
     // rejected trial's, so that the score at a point does not depend on the trials before it.
-    std::vector<CueStrike> anchor = strikes;
+    std::vector<TimedStrike> anchor = strikes;
     auto refit = [&](const VectorXd& u, double* out) -> absl::Status {
       absl::StatusOr<TableModel> m = model_at(u);
       if (!m.ok()) return m.status();
       for (int i : train) {
         const Recording& rec = recordings[static_cast<size_t>(i)];
         if (rec.strike) continue;
-        VectorXd su(map.size());
-        map.FromStrike(anchor[static_cast<size_t>(i)], su.data());
-        if (absl::Status st = RefineStrike(*m, solver, rec, map, 1e300, nullptr, kRefitIterations,
+        const StrikeMap sm = map_of(i);
+        VectorXd su(sm.size());
+        sm.FromTimed(anchor[static_cast<size_t>(i)], su.data());
+        if (absl::Status st = RefineStrike(*m, solver, rec, sm, 1e300, nullptr, kRefitIterations,
                                            &budget, &su);
             !st.ok()) {
           return st;
         }
-        strikes[static_cast<size_t>(i)] = map.ToStrike(su.data());
+        strikes[static_cast<size_t>(i)] = sm.ToTimed(su.data());
       }
       return all_residuals(u, out);
     };
@@ -675,18 +871,19 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       }
       absl::StatusOr<TableModel> m = model_at(u);
       if (!m.ok()) return m.status();
-      const int ks = map.size();
       for (int i : train) {
         const Recording& rec = recordings[static_cast<size_t>(i)];
         if (rec.strike) continue;
+        const StrikeMap sm = map_of(i);
+        const int ks = sm.size();
         const int r_0 = row0[static_cast<size_t>(i)], n = 2 * pts[static_cast<size_t>(i)].n;
         Eigen::MatrixXd js(n, ks);
         VectorXd su(ks), rs(n);
-        map.FromStrike(strikes[static_cast<size_t>(i)], su.data());
+        sm.FromTimed(strikes[static_cast<size_t>(i)], su.data());
         for (int c = 0; c < ks; ++c) {
           VectorXd sp = su;
           sp[c] += kDiffStep;
-          if (absl::Status st = Simulate(*m, solver, rec, map.ToStrike(sp.data()), pts[static_cast<size_t>(i)],
+          if (absl::Status st = Simulate(*m, solver, rec, sm.ToTimed(sp.data()), pts[static_cast<size_t>(i)],
                                          &budget, rs.data());
               !st.ok()) {
             return st;
@@ -708,8 +905,12 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     // strike fitted under the starting parameters can sit in another basin, a ball hit on the
     // other side, and pull the parameters its way); again while a strike changed.
     VectorXd r(rows);
-    for (int pass = 0; pass < kPasses && report.iterations < options.max_iterations; ++pass) {
-      absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - report.iterations);
+    // The held passes' share of the iterations; the rest (at least one of two or more) frees
+    // the times.
+    const int held_iterations =
+        any_clock ? std::max(1, options.max_iterations * 3 / 4) : options.max_iterations;
+    for (int pass = 0; pass < kPasses && report.iterations < held_iterations; ++pass) {
+      absl::StatusOr<int> it = Minimize(f, &x, held_iterations - report.iterations);
       if (!it.ok()) return it.status();
       report.iterations += std::max(*it, 1);
       // The strikes as fitted to the parameters reached (the last evaluation may have been a
@@ -725,10 +926,11 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
         if (rec.strike) continue;
         const ShotPoints& sp = pts[static_cast<size_t>(i)];
         const double now = r.segment(row0[static_cast<size_t>(i)], 2 * sp.n).squaredNorm();
-        absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300, &budget);
+        absl::StatusOr<StrikeFit> fresh =
+            FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300, &budget, /*free_time=*/false);
         if (!fresh.ok()) return fresh.status();
         if (fresh->error.rms_m * fresh->error.rms_m < (1.0 - 1e-3) * now) {
-          strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = fresh->strike;
+          strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
           changed = true;
         }
       }
@@ -736,6 +938,15 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       if (!changed) break;
       if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
       f.last_x.resize(0);  // the strikes moved: no cached evaluation holds
+    }
+    if (any_clock && report.iterations < options.max_iterations) {
+      free_times();
+      f.last_x.resize(0);
+      absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - report.iterations);
+      if (!it.ok()) return it.status();
+      report.iterations += std::max(*it, 1);
+      anchor = strikes;
+      if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
     }
     for (int c = 0; c < kp; ++c) {
       const Fitted& fp = fitted[static_cast<size_t>(c)];
@@ -754,14 +965,16 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     const Recording& rec = recordings[static_cast<size_t>(i)];
     ShotReport& sr = report.shots[static_cast<size_t>(i)];
     if (sr.heldout && !rec.strike) {
-      absl::StatusOr<StrikeFit> fit =
-          FitStrikeOn(*model1, solver, rec, options.strike_bounds, options.strike_window_s, &budget);
+      absl::StatusOr<StrikeFit> fit = FitStrikeOn(*model1, solver, rec, options.strike_bounds,
+                                                  options.strike_window_s, &budget, /*free_time=*/true);
       if (!fit.ok()) return fit.status();
-      strikes[static_cast<size_t>(i)] = fit->strike;
+      strikes[static_cast<size_t>(i)] = {fit->strike, fit->strike_time_s};
     }
-    sr.strike_after = strikes[static_cast<size_t>(i)];
+    sr.strike_after = strikes[static_cast<size_t>(i)].strike;
     sr.strike_after.phi_rad = std::remainder(sr.strike_after.phi_rad, 2.0 * std::numbers::pi);
-    absl::StatusOr<ShotError> e = ScoreShot(*model1, solver, rec, sr.strike_after);
+    sr.strike_time_after_s = strikes[static_cast<size_t>(i)].time_s;
+    absl::StatusOr<ShotError> e =
+        ScoreShot(*model1, solver, rec, sr.strike_after, 1e300, sr.strike_time_after_s);
     if (!e.ok()) return e.status();
     sr.after = *e;
     (sr.heldout ? held_before : train_before).push_back(sr.before.mean_m);
@@ -919,14 +1132,20 @@ absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const Solv
   if (!(options.noise_m >= 0.0 && options.noise_m <= 1.0)) {
     return absl::InvalidArgumentError("noise_m must be in [0, 1] m");
   }
-  if (!(options.max_s > 0.0 && options.max_s <= 3600.0)) {
-    return absl::InvalidArgumentError("max_s must be in (0, 3600] s");
+  if (!(options.max_s > 0.0 && options.max_s <= kMaxTrackTime)) {
+    return absl::InvalidArgumentError(absl::StrFormat("max_s must be in (0, %g] s", kMaxTrackTime));
+  }
+  if (!(options.strike_time_s >= 0.0 && options.strike_time_s < options.max_s)) {
+    return absl::InvalidArgumentError("strike_time_s must be in [0, max_s)");
   }
   Recording rec;
   rec.initial = initial;
   rec.initial.t_s = 0.0;
   rec.cue = cue;
   if (options.keep_strike) rec.strike = strike;
+  rec.strike_time_s = options.keep_strike || options.keep_strike_time
+                          ? std::optional<double>(options.strike_time_s)
+                          : std::nullopt;
   TableState state = rec.initial;
   absl::StatusOr<StrikeOutcome> struck = ApplyStrike(model, solver.effects, strike, cue, &state);
   if (!struck.ok()) return struck.status();
@@ -939,9 +1158,12 @@ absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const Solv
   for (int64_t k = 1;; ++k) {
     const double t = static_cast<double>(k) / options.rate_hz;
     if (t > options.max_s) break;
-    events.clear();
-    if (absl::Status s = (*sim)->AdvanceTo(t, &events); !s.ok()) return s;
-    const TableState& now = (*sim)->state();
+    const bool started = t >= options.strike_time_s;
+    if (started) {
+      events.clear();
+      if (absl::Status s = (*sim)->AdvanceTo(t - options.strike_time_s, &events); !s.ok()) return s;
+    }
+    const TableState& now = started ? (*sim)->state() : rec.initial;
     for (size_t b = 0; b < now.balls.size(); ++b) {
       if (now.balls[b].pocket >= 0) continue;
       TrackPoint p{.t_s = t, .ball = static_cast<int>(b), .xy = now.balls[b].r.head<2>()};
@@ -951,7 +1173,7 @@ absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const Solv
       }
       rec.track.push_back(p);
     }
-    if ((*sim)->AtRest()) break;
+    if (started && (*sim)->AtRest()) break;
   }
   return rec;
 }

@@ -2,9 +2,10 @@
 // engine's, and a fit of each shot's cue inputs and the table's parameters to them.
 //
 // A recording is a table at rest (the balls where they stood before the strike), the struck
-// ball, and tracked positions (t, ball, x, y) after the strike, as a camera tracker gives
-// them (50 Hz is common). The cue inputs are usually unknown: a shot's strike (the cue ball's
-// speed, heading and tip offsets; the cue level) is fitted with it.
+// ball, and tracked positions (t, ball, x, y) on the tracker's clock, as a camera tracker
+// gives them (50 Hz is common). The cue inputs are usually unknown: a shot's strike (the cue
+// ball's speed, heading and tip offsets; the cue level) is fitted with it, and so is the
+// strike's time on that clock where the recording does not give it.
 //
 // The score of a shot (ShotError) is the mean distance between each tracked position and the
 // simulated ball's centre at the same time, over every tracked point of every ball; the fit
@@ -36,8 +37,11 @@
 
 namespace sportsim::billiards {
 
+/// Latest time a track may hold (s).
+inline constexpr double kMaxTrackTime = 3600.0;
+
 /// One tracked position: ball `ball` (its index in Recording::initial) centred at `xy` (m, the
-/// table frame) at `t_s` (s after the strike).
+/// table frame) at `t_s` (s on the track's clock; the strike is at Recording::strike_time_s).
 struct TrackPoint {
   double t_s = 0.0;
   int ball = 0;
@@ -47,16 +51,23 @@ struct TrackPoint {
 /// A recorded shot.
 struct Recording {
   std::string name;
-  TableState initial;              ///< every ball at rest before the strike, t_s = 0
+  TableState initial;              ///< every ball at rest before the strike
   int cue = 0;                     ///< the struck ball (index in initial.balls)
   std::vector<TrackPoint> track;   ///< in time order (ties in any order)
   /// The cue inputs when they are known (a robot, a sensor cue): then they are not fitted.
   std::optional<CueStrike> strike;
+  /// When the cue struck, on the track's clock (s). A tracker's clock rarely starts at the
+  /// strike: it may run for a while before it, and at 50 Hz the strike falls anywhere within
+  /// a 20 ms frame, which a 3 m/s ball crosses 6 cm of. nullopt: unknown, fitted with the
+  /// strike, between the cue ball's last tracked point on its spot (within 3 mm; else 0) and
+  /// its first a centimetre away. A known strike needs a known time.
+  std::optional<double> strike_time_s = 0.0;
 };
 
 /// Checks a recording against a model: balls on the table and at rest, a valid cue index,
-/// at least one tracked point, times finite, >= 0 and in order, ball indices valid, positions
-/// finite, a known strike valid. InvalidArgument naming the field.
+/// at least one tracked point, times finite, in [0, kMaxTrackTime] and in order, ball indices
+/// valid, positions finite, a known strike valid and timed, a strike time in [0,
+/// kMaxTrackTime]. InvalidArgument naming the field.
 absl::Status ValidateRecording(const TableModel& model, const Recording& recording);
 
 /// How far the engine's shot is from the recording.
@@ -67,12 +78,15 @@ struct ShotError {
   int points = 0;        ///< tracked points scored
 };
 
-/// Simulates `strike` on the recording's table under `model` and scores it against the
-/// tracked points with t_s <= until_s (all of them by default). Errors: the strike's or the
-/// engine's (InvalidArgument, ResourceExhausted).
+/// Simulates `strike` on the recording's table under `model`, struck at `strike_time_s` on
+/// the track's clock (by default the recording's, or where it is unknown the estimate read
+/// from the cue ball's track), and scores it against the tracked points up to until_s after
+/// the strike (all of them by default); before the strike every ball is where it stood.
+/// Errors: the strike's or the engine's (InvalidArgument, ResourceExhausted).
 absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions& solver,
                                     const Recording& recording, const CueStrike& strike,
-                                    double until_s = 1e300);
+                                    double until_s = 1e300,
+                                    std::optional<double> strike_time_s = std::nullopt);
 
 /// What a shot's fitted strike may be: the cue ball's speed just after the strike (ball_speed),
 /// its heading, the tip offsets (each within +-0.7 of the miscue limit, so that both together
@@ -84,9 +98,14 @@ struct StrikeBounds {
   double max_elevation_deg = 30.0;
 };
 
-/// Fits a shot's strike to its tracked points with t_s <= until_s (with the table fixed).
+/// Fits a shot's strike (and its time, where the recording's is unknown) to its tracked
+/// points up to until_s after the strike (with the table fixed). An unknown strike time is
+/// fitted on the first motion, then refined with the strike over the whole window within a
+/// tenth of a tracker's frame of it (docs/billiards.md); its window is counted from its
+/// estimate read from the track, so that the points fitted stay the same while it moves.
 struct StrikeFit {
   CueStrike strike;       ///< ball_speed = true: speed_mps is the cue ball's speed
+  double strike_time_s = 0.0;  ///< on the track's clock (the recording's when known)
   ShotError error;        ///< over the points fitted
   int64_t simulations = 0;
 };
@@ -112,11 +131,13 @@ struct CalibrationOptions {
   /// Indices of the recordings held out of the fit (scored only).
   std::vector<int> heldout;
   StrikeBounds strike_bounds;
-  /// Fit each shot's strike on its points with t_s <= this only (the table's parameters use
-  /// every point); the held-out report then also says how well the rest of the shot is
-  /// predicted. Default: every point.
+  /// Fit each held-out shot's strike on its points up to this long after the strike only;
+  /// the held-out report then also says how well the rest of the shot is predicted. Default:
+  /// every point.
   double strike_window_s = 1e300;
-  int max_iterations = 60;          ///< Levenberg-Marquardt iterations of the joint fit
+  /// Levenberg-Marquardt iterations of the joint fit (with unknown strike times, a quarter of
+  /// them, at least one of two or more, go to the last solve, which frees the times).
+  int max_iterations = 60;
   int64_t max_simulations = 2000000;  ///< budget over the whole calibration
   std::function<bool()> cancelled;  ///< polled between simulations: Cancelled
   /// Called as the calibration goes: the fraction done (0..1) and the stage's name.
@@ -129,6 +150,7 @@ struct ShotReport {
   std::string name;
   bool heldout = false;
   CueStrike strike_before, strike_after;
+  double strike_time_before_s = 0.0, strike_time_after_s = 0.0;  ///< on the track's clock
   ShotError before, after;
 };
 
@@ -183,16 +205,19 @@ std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recordi
 /// events as the rail nearest where it happened.
 std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> events, int ball);
 
-/// A synthetic recording: `strike` played on `initial` under `model`, every ball on the table
-/// tracked at `rate_hz` from the strike until all rest (at most max_s), each coordinate with
-/// Gaussian noise of sigma noise_m (seeded; 0: exact). The strike is kept in the recording
-/// only when keep_strike.
+/// A synthetic recording: `strike` played on `initial` under `model` at strike_time_s on the
+/// tracker's clock, every ball on the table tracked at `rate_hz` (at t = k / rate_hz, k >= 1)
+/// until all rest after the strike (at most max_s), each coordinate with Gaussian noise of
+/// sigma noise_m (seeded; 0: exact). The strike is kept in the recording only when
+/// keep_strike, its time when keep_strike or keep_strike_time.
 struct SyntheticOptions {
   double rate_hz = 50.0;
   double noise_m = 0.0;
   uint64_t seed = 1;
   double max_s = 60.0;
   bool keep_strike = false;
+  double strike_time_s = 0.0;
+  bool keep_strike_time = true;
 };
 absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,
                                              const TableState& initial, int cue,

@@ -3,6 +3,7 @@
 // parameters, tracked at 50 Hz with Gaussian noise like a camera tracker's).
 #include "sim/billiards/calibrate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -70,7 +71,15 @@ CueStrike RandomStrike(const TableState& s, std::mt19937_64& rng) {
   return c;
 }
 
-std::vector<Recording> Recordings(const TableModel& truth, int n, double noise_m, uint64_t seed) {
+// The strike's time on a tracker's clock that starts before it: 0.1 to 0.6 s, anywhere within
+// a frame.
+double TrackerStrikeTime(int i) { return 0.1 + 0.5 * std::fmod(0.618034 * (i + 1), 1.0); }
+
+// n random shots tracked at 50 Hz with noise. With tracker_clock the tracker starts before
+// the strike (TrackerStrikeTime) and the strike's time is not in the recording; else the
+// track's clock starts at the strike, which the recording says.
+std::vector<Recording> Recordings(const TableModel& truth, int n, double noise_m, uint64_t seed,
+                                  bool tracker_clock = false) {
   std::mt19937_64 rng(seed);
   std::vector<Recording> out;
   for (int i = 0; i < n; ++i) {
@@ -78,7 +87,11 @@ std::vector<Recording> Recordings(const TableModel& truth, int n, double noise_m
     const CueStrike strike = RandomStrike(layout, rng);
     absl::StatusOr<Recording> r = SyntheticRecording(
         truth, SolverOptions{}, layout, 0, strike,
-        SyntheticOptions{.rate_hz = 50, .noise_m = noise_m, .seed = seed * 1000 + static_cast<uint64_t>(i)});
+        SyntheticOptions{.rate_hz = 50,
+                         .noise_m = noise_m,
+                         .seed = seed * 1000 + static_cast<uint64_t>(i),
+                         .strike_time_s = tracker_clock ? TrackerStrikeTime(i) : 0.0,
+                         .keep_strike_time = !tracker_clock});
     EXPECT_TRUE(r.ok()) << r.status();
     r->name = "shot" + std::to_string(i);
     out.push_back(*std::move(r));
@@ -198,12 +211,63 @@ TEST(CalibrateTest, FitStrikeRecoversTheCueInputs) {
   }
 }
 
+// On a tracker's clock that started before the strike, the strike's time is unknown: it is
+// fitted with the cue inputs, to well within a frame, and the fitted shot lies as far from the
+// track as the noise. Taken instead as the frame before the cue ball moves, the same shots fit
+// worse, some far worse, with their speeds biased (the strike fit trades speed and spin for
+// the lost time); taken as the clock's start, they fit badly.
+TEST(CalibrateTest, FitStrikeFindsTheStrikeOnATrackersClock) {
+  const TableModel truth = *TableModel::Create(TrueTable());
+  const std::vector<Recording> recs = Recordings(truth, 6, 1e-3, 11, /*tracker_clock=*/true);
+  std::mt19937_64 rng(11);
+  double fitted_speed = 0.0, framed_speed = 0.0, framed_worst = 0.0;  // relative speed errors
+  std::vector<double> start_errors;
+  for (size_t i = 0; i < recs.size(); ++i) {
+    const TableState layout = RandomLayout(truth, rng);
+    const CueStrike want = RandomStrike(layout, rng);
+    ASSERT_FALSE(recs[i].strike_time_s.has_value());
+    const double when = TrackerStrikeTime(static_cast<int>(i));
+    EXPECT_LT(recs[i].track.front().t_s, when - 0.05);  // the balls are tracked at rest first
+    absl::StatusOr<StrikeFit> fit = FitStrike(truth, SolverOptions{}, recs[i]);
+    ASSERT_TRUE(fit.ok()) << fit.status();
+    EXPECT_LT(fit->error.mean_m, 1.5e-3) << i;
+    EXPECT_NEAR(fit->strike_time_s, when, 1e-3) << i;
+    EXPECT_NEAR(fit->strike.speed_mps, want.speed_mps, 0.01 * want.speed_mps) << i;
+    EXPECT_NEAR(std::remainder(fit->strike.phi_rad - want.phi_rad, 2 * std::numbers::pi), 0.0, 0.1 * kDeg) << i;
+    absl::StatusOr<ShotError> scored =
+        ScoreShot(truth, SolverOptions{}, recs[i], fit->strike, 1e300, fit->strike_time_s);
+    ASSERT_TRUE(scored.ok());
+    EXPECT_EQ(scored->mean_m, fit->error.mean_m);
+
+    fitted_speed += std::abs(fit->strike.speed_mps - want.speed_mps) / want.speed_mps;
+
+    // The strike taken at the tracker's frame before it, and at the clock's start.
+    Recording framed = recs[i];
+    framed.strike_time_s = std::floor(when * 50) / 50;
+    absl::StatusOr<StrikeFit> trusting = FitStrike(truth, SolverOptions{}, framed);
+    ASSERT_TRUE(trusting.ok()) << trusting.status();
+    EXPECT_EQ(trusting->strike_time_s, *framed.strike_time_s);
+    EXPECT_GT(trusting->error.mean_m, fit->error.mean_m) << i;
+    framed_speed += std::abs(trusting->strike.speed_mps - want.speed_mps) / want.speed_mps;
+    framed_worst = std::max(framed_worst, trusting->error.mean_m);
+    framed.strike_time_s = 0.0;
+    absl::StatusOr<StrikeFit> at_start = FitStrike(truth, SolverOptions{}, framed);
+    ASSERT_TRUE(at_start.ok()) << at_start.status();
+    start_errors.push_back(at_start->error.mean_m);
+  }
+  EXPECT_GT(framed_speed, 10 * fitted_speed);
+  EXPECT_GT(framed_worst, 10e-3);
+  std::sort(start_errors.begin(), start_errors.end());
+  EXPECT_GT(start_errors[start_errors.size() / 2], 50e-3);
+}
+
 // The joint fit recovers the table's cloth and cushion constants from eight training shots
-// (starting from the carom preset's), and the held-out shots' error falls to the noise.
+// (starting from the carom preset's), and the held-out shots' error falls to the noise. The
+// tracker's clock started before each strike, whose time is fitted with it.
 TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
   const TableSpec want = TrueTable();
   const TableModel truth = *TableModel::Create(want);
-  const std::vector<Recording> recs = Recordings(truth, 12, 1e-3, 23);
+  const std::vector<Recording> recs = Recordings(truth, 12, 1e-3, 23, /*tracker_clock=*/true);
   CalibrationOptions o;
   for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2", "e_cushion", "f_cushion"}) {
     o.params.push_back({.name = p});
@@ -221,6 +285,9 @@ TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
   EXPECT_LT(r->heldout_after_m, 2e-3);
   EXPECT_GT(r->heldout_before_m, 5 * r->heldout_after_m);
   EXPECT_LT(r->train_after_m, 2e-3);
+  for (size_t i = 0; i < recs.size(); ++i) {
+    EXPECT_NEAR(r->shots[i].strike_time_after_s, TrackerStrikeTime(static_cast<int>(i)), 2e-3) << i;
+  }
   ASSERT_FALSE(fractions.empty());
   EXPECT_EQ(fractions.back(), 1.0);
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
@@ -325,6 +392,13 @@ TEST(CalibrateTest, RefusesBadInputNamingTheField) {
       if (p.ball == recs[0].cue) p.xy = recs[0].initial.balls[0].r.head<2>();
     }
     EXPECT_THAT(refused(recs, none), HasSubstr("never leaves its spot"));
+    recs = good;
+    recs[1].strike_time_s = std::nan("");
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[1].strike_time_s must be finite"));
+    recs = good;
+    recs[1].strike = CueStrike{};
+    recs[1].strike_time_s.reset();
+    EXPECT_THAT(refused(recs, none), HasSubstr("recordings[1].strike_time_s: a known strike needs its time"));
   }
 }
 
