@@ -851,10 +851,12 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
       std::cout << absl::StrFormat("%-22s %12.6g %12.6g   [%g, %g]\n", p.name(), p.before(), p.after(),
                                    p.lo(), p.hi());
     }
-    std::cout << absl::StrFormat("%-22s %9s %9s  %s\n", "shot", "before", "after", "(mean distance, mm)");
+    std::cout << absl::StrFormat("%-22s %9s %9s %9s  %s\n", "shot", "before", "after", "strike s",
+                                 "(mean distance, mm; strike time on the file's clock)");
     for (const v1::ShotCalibration& c : rep.shots()) {
-      std::cout << absl::StrFormat("%-22s %9.1f %9.1f  %s\n", c.name(), 1e3 * c.before().mean_m(),
-                                   1e3 * c.after().mean_m(), c.heldout() ? "held out" : "");
+      std::cout << absl::StrFormat("%-22s %9.1f %9.1f %9.4f  %s\n", c.name(), 1e3 * c.before().mean_m(),
+                                   1e3 * c.after().mean_m(), c.strike_time_after_s(),
+                                   c.heldout() ? "held out" : "");
     }
     std::cout << absl::StrFormat("median: training %.1f -> %.1f mm", 1e3 * rep.train_before_m(),
                                  1e3 * rep.train_after_m());

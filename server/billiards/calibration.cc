@@ -1,6 +1,7 @@
 #include "server/billiards/calibration.h"
 
 #include <cmath>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -69,6 +70,10 @@ absl::StatusOr<b::Recording> ShotFromProto(const b::TableModel& model, const v1:
     if (!strike.ok()) return PrefixStatus(field + ".", strike.status());
     rec.strike = *strike;
   }
+  // Given, or 0 with a given strike (the strike's time before the field was there), or fitted.
+  rec.strike_time_s = shot.has_strike_time_s()
+                          ? std::optional<double>(shot.strike_time_s())
+                          : shot.has_strike() ? std::optional<double>(0.0) : std::nullopt;
   if (absl::Status s = b::ValidateRecording(model, rec); !s.ok()) {
     // The library's field names, as the request spells them.
     std::string message(s.message());
@@ -243,6 +248,8 @@ void CalibrationReportToProto(const CalibrationJob& job, const b::CalibrationRep
     c->mutable_strike_after()->set_ball(cue);
     ErrorToProto(s.before, c->mutable_before());
     ErrorToProto(s.after, c->mutable_after());
+    c->set_strike_time_before_s(s.strike_time_before_s);
+    c->set_strike_time_after_s(s.strike_time_after_s);
   }
   out->set_train_before_m(report.train_before_m);
   out->set_train_after_m(report.train_after_m);

@@ -1681,6 +1681,41 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 64, r.stderr)
         self.assertIn("--track-origin: centre or corner", r.stderr)
 
+    def test_a_trackers_clock_started_before_the_strike(self):
+        # The first recording as a tracker whose clock ran 0.25 s before the strike gives it:
+        # the balls at rest at 50 Hz, then the shot. The strike's time comes back from the
+        # track, and the rolling resistance as from the file that starts at the strike.
+        lead = 0.25
+        with open(self.files[0]) as f:
+            rows = list(csv.DictReader(f))
+        spots = [row for row in rows if float(row["t_s"]) <= 0]
+        path = os.path.join(self.dir.name, "early.csv")
+        with open(path, "w") as f:
+            f.write("t,ball,x,y\n")
+            for k in range(13):  # t = 0 .. 0.24
+                for row in spots:
+                    f.write("%g,%s,%s,%s\n" % (0.02 * k, row["id"], row["x_m"], row["y_m"]))
+            for row in rows:
+                if float(row["t_s"]) > 0:
+                    f.write("%.17g,%s,%s,%s\n" % (float(row["t_s"]) + lead, row["id"],
+                                                   row["x_m"], row["y_m"]))
+        runs = {}
+        for name in (path, self.files[0]):
+            r = cli(self.server.address, "--format", "json", "table", "calibrate", name,
+                    "--table", "carom", "--fit", "mu_roll")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            runs[name] = json.loads(r.stdout)
+        for name, when in ((path, lead), (self.files[0], 0.0)):
+            report = runs[name]
+            self.assertAlmostEqual(report["params"]["mu_roll"], 0.006, delta=0.006 * 0.01)
+            shot = report["shots"][0]
+            self.assertAlmostEqual(shot.get("strike_time_after_s", 0.0), when, delta=1e-3)
+            self.assertLess(shot["after"]["mean_m"], 1e-3)
+        r = cli(self.server.address, "table", "calibrate", path, "--table", "carom")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("strike s", r.stdout)
+        self.assertRegex(r.stdout, r"early\.csv +[0-9.]+ +[0-9.]+ +0\.2[45]\d\d")
+
     def test_calibrate_text_names_the_flags_to_use(self):
         r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
                 "--fit", "mu_roll=0.002:0.015", "--heldout", "1")

@@ -189,6 +189,52 @@ TEST_F(CalibrationTest, RecoversTheTablesRollingResistanceAsTheOfflineCalibratio
   ExpectTheOfflineReport(req, rep);
 }
 
+// A tracker's clock that runs before the strike: the same shots with 0.3 s of the balls at
+// rest before them. The strike's time is fitted (to well within a 50 Hz frame) and the
+// calibration comes out as before; a strike time given is kept.
+TEST_F(CalibrationTest, FitsTheStrikesTimeOnATrackersClock) {
+  Start();
+  v1::CalibrateTableRequest req = Request();
+  constexpr double kLead = 0.3;
+  for (v1::RecordedShot& shot : *req.mutable_shots()) {
+    v1::RecordedShot early = shot;
+    early.clear_points();
+    for (int k = 1; k <= 15; ++k) {  // 50 Hz, up to the strike
+      for (int b = 0; b < shot.balls_size(); ++b) {
+        v1::TrackedPoint* p = early.add_points();
+        p->set_t_s(k * 0.02);
+        p->set_ball(static_cast<uint32_t>(b));
+        p->set_x_m(shot.balls(b).x_m());
+        p->set_y_m(shot.balls(b).y_m());
+      }
+    }
+    for (v1::TrackedPoint p : shot.points()) {
+      p.set_t_s(p.t_s() + kLead);
+      *early.add_points() = p;
+    }
+    shot = early;
+  }
+  std::vector<v1::CalibrateTableResponse> msgs;
+  grpc::Status st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  const v1::CalibrationReport& rep = msgs.back().report();
+  EXPECT_NEAR(rep.params().at("mu_roll"), 0.006, 0.006 * 0.01);
+  for (const v1::ShotCalibration& s : rep.shots()) {
+    EXPECT_NEAR(s.strike_time_after_s(), kLead, 1e-3);
+    EXPECT_LT(s.after().mean_m(), 1e-3);
+  }
+  ExpectTheOfflineReport(req, rep);
+
+  req.mutable_shots(0)->set_strike_time_s(kLead);
+  msgs.clear();
+  st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  EXPECT_EQ(msgs.back().report().shots(0).strike_time_before_s(), kLead);
+  EXPECT_EQ(msgs.back().report().shots(0).strike_time_after_s(), kLead);
+}
+
 // Refused before any work, with the field named.
 TEST_F(CalibrationTest, BadRequestsAreInvalidArgumentNamingTheField) {
   Start();
@@ -209,6 +255,9 @@ TEST_F(CalibrationTest, BadRequestsAreInvalidArgumentNamingTheField) {
   req = good;
   req.mutable_shots(0)->mutable_points(5)->set_t_s(-1);
   EXPECT_THAT(refused(req), HasSubstr("shots[0].points[5].t_s"));
+  req = good;
+  req.mutable_shots(1)->set_strike_time_s(-0.5);
+  EXPECT_THAT(refused(req), HasSubstr("shots[1].strike_time_s must be finite and in [0, 3600]"));
   req = good;
   req.mutable_shots(0)->set_cue_ball("blue");
   EXPECT_THAT(refused(req), HasSubstr("shots[0].cue_ball"));
