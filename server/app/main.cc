@@ -108,7 +108,8 @@ ABSL_FLAG(int64_t, max_upload_bytes, int64_t{64} << 20,
           "What UploadCalibration's uploads in progress may hold in all (bytes; an upload past "
           "it is refused with RESOURCE_EXHAUSTED)");
 ABSL_FLAG(Seconds, stream_stall_timeout, Seconds{absl::Seconds(30)},
-          "A SimulateShots stream whose client reads nothing this long is stopped (0: never)");
+          "A SimulateShots stream whose client reads nothing this long, or an UploadCalibration "
+          "whose client sends nothing this long while it uploads, is stopped (0: never)");
 ABSL_FLAG(int, sim_workers, 0,
           "Threads computing simulations (SimulateShot, SimulateSwing, SimulateFlight, "
           "StartSwing), apart from gRPC's and the tick workers, at a lower priority; 0: one "

@@ -688,7 +688,8 @@ class BatchReactor final : public grpc::ServerWriteReactor<v1::SimulateShotsResp
 // interactive work), under the request's CPU budget (--max_request_cpu), cancellation and
 // deadline. Its progress is streamed as it goes; only the latest unsent progress is kept (a
 // slow reader sees fewer, and the server holds one message), and the last message carries the
-// report. The stream is finished once the job has ended and no write is in flight, so nothing
+// report. The stream is finished once the job has ended, no write is in flight and the
+// derived call holds nothing (Holding: UploadCalibration's reads and read alarm), so nothing
 // touches the reactor after it is done. `Base` is the reactor: CalibrateTable's writes only,
 // UploadCalibration's reads the request first.
 template <typename Base>
@@ -706,15 +707,16 @@ class CalibrationCall : public Base {
   // Checks the request and queues its job, or ends the call with the error.
   void Begin(WorkPool* pool, grpc::CallbackServerContext* ctx, const v1::CalibrateTableRequest& request) {
     absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(request);
-    if (!job.ok()) {
-      Fail(job.status());
-      return;
-    }
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      Begun();
+      if (!job.ok()) {
+        FailLocked(job.status());
+      } else {
+        running_ = true;
+      }
+    });
+    if (!job.ok()) return;
     auto shared = std::make_shared<CalibrationJob>(*std::move(job));
-    {
-      absl::MutexLock lock(&mu_);
-      running_ = true;
-    }
     absl::Status queued = pool->Submit(
         [this, shared, pool](const WorkControl& control) { Run(shared.get(), control, pool); },
         [this](const absl::Status& dropped) {
@@ -732,31 +734,50 @@ class CalibrationCall : public Base {
     }
   }
 
-  // Ends the call with `status` (no job running, nothing written).
-  void Fail(const absl::Status& status) {
-    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
-      if (error_.ok()) error_ = status;
-    });
+  // The call's first error: no job is started after one, and the call ends once nothing
+  // runs, is written or is held.
+  void FailLocked(const absl::Status& status) ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (error_.ok()) error_ = status;
   }
 
   // Called once, just before the call finishes (its job ended, nothing left to write), so a
   // client that has its status sees what the call held given back.
   virtual void Finishing() {}
+  // Whether the derived call still holds what must end before the call does (an alarm whose
+  // callback has not come back); it may ask for AfterStep to end it.
+  virtual bool Holding() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { return false; }
+  // Called as Begin has checked the request, before the job is queued or the call fails.
+  virtual void Begun() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {}
+  // Whether a step is to end with AfterStep (taking the request: each is done once).
+  virtual bool TakeAfterStep() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { return false; }
+  // What TakeAfterStep asked for, without mu_ (cancel an alarm). The call holds on (Holding)
+  // until that is done, so the reactor is alive.
+  virtual void AfterStep() {}
 
- private:
+  // Runs `f` under mu_, pumps, then (without the lock) what the derived call asked for and,
+  // when the pump says so, Finishing and Finish. Nothing touches the reactor after Finish
+  // (nor, in a step that does not finish, after the lock is released: another thread's step
+  // may finish the call).
   template <typename F>
   void Step(F f) {
     std::optional<grpc::Status> finish;
+    bool after = false;
     {
       absl::MutexLock lock(&mu_);
       f();
       finish = Pump();
+      after = TakeAfterStep();
     }
+    if (after) AfterStep();
     if (finish.has_value()) {
       Finishing();
       this->Finish(*finish);
     }
   }
+
+  absl::Mutex mu_;
+
+ private:
 
   // Writes the pending message when no write is in flight; says when to finish: the job has
   // ended and nothing is left to write (or it failed).
@@ -770,7 +791,7 @@ class CalibrationCall : public Base {
       this->StartWrite(&out_);
       return std::nullopt;
     }
-    if (!writing_ && !running_) {
+    if (!writing_ && !running_ && !Holding()) {
       finished_ = true;
       return ToGrpcStatus(error_);
     }
@@ -817,7 +838,6 @@ class CalibrationCall : public Base {
     });
   }
 
-  absl::Mutex mu_;
   bool running_ ABSL_GUARDED_BY(mu_) = false;
   bool writing_ ABSL_GUARDED_BY(mu_) = false;
   bool finished_ ABSL_GUARDED_BY(mu_) = false;
@@ -857,33 +877,45 @@ class ByteBudget {
 
 // UploadCalibration: the request in parts, each counted against the server's upload budget
 // from its arrival until the call finishes (the job's recordings are about as large); the
-// calibration begins when the client half-closes.
+// calibration begins when the client half-closes. A client that sends nothing for
+// --stream_stall_timeout while it uploads ends its upload (RESOURCE_EXHAUSTED), so that a
+// trickle cannot hold the budget for as long as its deadline: a read alarm checks every
+// stall_timeout that some part arrived since it was set.
 class UploadCalibrationReactor final
     : public CalibrationCall<grpc::ServerBidiReactor<v1::CalibrationUpload, v1::CalibrateTableResponse>> {
  public:
-  UploadCalibrationReactor(WorkPool* pool, grpc::CallbackServerContext* ctx, ByteBudget* budget)
-      : pool_(pool), ctx_(ctx), budget_(budget) {
+  UploadCalibrationReactor(WorkPool* pool, grpc::CallbackServerContext* ctx, ByteBudget* budget,
+                           absl::Duration stall_timeout)
+      : pool_(pool), ctx_(ctx), budget_(budget), stall_timeout_(stall_timeout) {
     StartRead(&in_);
+    absl::MutexLock lock(&mu_);  // OnDone waits for this handler to return
+    ArmReadAlarm();
   }
   ~UploadCalibrationReactor() override { budget_->Release(held_); }  // 0 once finished
 
   void OnReadDone(bool ok) override {
+    {
+      absl::MutexLock lock(&mu_);
+      // Stopped while this read was pending (a stall): the call is finishing without it.
+      if (!reading_) return;
+      if (ok) ++reads_;
+    }
     if (!ok) {  // the client half-closed, or the call is going away
       if (ctx_->IsCancelled()) {
-        Fail(absl::CancelledError("the upload was cancelled"));
+        StopReading(absl::CancelledError("the upload was cancelled"));
         return;
       }
       absl::StatusOr<v1::CalibrateTableRequest> request = std::move(assembler_).Finish();
       if (!request.ok()) {
-        Fail(request.status());
+        StopReading(request.status());
         return;
       }
-      Begin(pool_, ctx_, *request);
+      Begin(pool_, ctx_, *request);  // stops reading (Begun)
       return;
     }
     const int64_t n = static_cast<int64_t>(in_.ByteSizeLong());
     if (!budget_->Reserve(n)) {
-      Fail(absl::ResourceExhaustedError(absl::StrFormat(
+      StopReading(absl::ResourceExhaustedError(absl::StrFormat(
           "the uploads in progress hold the server's --max_upload_bytes (%d) already: try again "
           "later",
           budget_->cap())));
@@ -891,13 +923,60 @@ class UploadCalibrationReactor final
     }
     held_ += n;
     if (absl::Status s = assembler_.Add(in_); !s.ok()) {
-      Fail(s);
+      StopReading(s);
       return;
     }
     StartRead(&in_);
   }
 
  private:
+  // Ends the upload with `status`: no more reads, and the call finishes once the read alarm
+  // is back.
+  void StopReading(const absl::Status& status) {
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      reading_ = false;
+      FailLocked(status);
+    });
+  }
+
+  void ArmReadAlarm() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (alarm_pending_ || !reading_ || stall_timeout_ <= absl::ZeroDuration()) return;
+    alarm_pending_ = true;
+    alarm_reads_ = reads_;
+    // A fresh alarm each time (the one that fired may be the caller, still running).
+    alarm_ = std::make_unique<grpc::Alarm>();
+    alarm_->Set(absl::ToChronoTime(absl::Now() + stall_timeout_),
+                [this](bool fired) { OnReadAlarm(fired); });
+  }
+  void OnReadAlarm(bool fired) {
+    Step([&]() ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+      alarm_pending_ = false;
+      if (!fired || !reading_) return;
+      if (reads_ == alarm_reads_) {
+        // The pending read completes after the status goes out, and is ignored.
+        reading_ = false;
+        FailLocked(absl::ResourceExhaustedError(absl::StrFormat(
+            "the client sent nothing for %s (--stream_stall_timeout): the upload was stopped",
+            absl::FormatDuration(stall_timeout_))));
+      } else {
+        ArmReadAlarm();
+      }
+    });
+  }
+
+  bool Holding() override ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    if (!reading_ && alarm_pending_ && !alarm_cancel_asked_) {
+      alarm_cancel_asked_ = true;
+      cancel_alarm_ = true;
+    }
+    return reading_ || alarm_pending_;
+  }
+  void Begun() override ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) { reading_ = false; }
+  bool TakeAfterStep() override ABSL_EXCLUSIVE_LOCKS_REQUIRED(mu_) {
+    return std::exchange(cancel_alarm_, false);
+  }
+  void AfterStep() override { alarm_->Cancel(); }  // its callback (not fired) comes back
+
   // Given back before the status goes out, not when gRPC is done with the call (later), so
   // the client's next upload finds it free.
   void Finishing() override {
@@ -908,9 +987,17 @@ class UploadCalibrationReactor final
   WorkPool* const pool_;
   grpc::CallbackServerContext* const ctx_;
   ByteBudget* const budget_;
+  const absl::Duration stall_timeout_;
   int64_t held_ = 0;  // reserved from budget_
   v1::CalibrationUpload in_;
   CalibrationUploadAssembler assembler_;
+  bool reading_ ABSL_GUARDED_BY(mu_) = true;  // parts may still come (no end, no error)
+  int64_t reads_ ABSL_GUARDED_BY(mu_) = 0;    // parts arrived
+  std::unique_ptr<grpc::Alarm> alarm_;       // set by ArmReadAlarm, cancelled by AfterStep
+  bool alarm_pending_ ABSL_GUARDED_BY(mu_) = false;
+  bool alarm_cancel_asked_ ABSL_GUARDED_BY(mu_) = false;
+  bool cancel_alarm_ ABSL_GUARDED_BY(mu_) = false;
+  int64_t alarm_reads_ ABSL_GUARDED_BY(mu_) = 0;
 };
 
 class BilliardsService final : public v1::Billiards::CallbackService {
@@ -981,7 +1068,7 @@ class BilliardsService final : public v1::Billiards::CallbackService {
   }
   grpc::ServerBidiReactor<v1::CalibrationUpload, v1::CalibrateTableResponse>* UploadCalibration(
       grpc::CallbackServerContext* ctx) override {
-    return new UploadCalibrationReactor(pool_, ctx, &uploads_);
+    return new UploadCalibrationReactor(pool_, ctx, &uploads_, streams_.stall_timeout);
   }
   grpc::ServerUnaryReactor* PreviewShot(grpc::CallbackServerContext* ctx,
                                         const v1::PreviewShotRequest* request,

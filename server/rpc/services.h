@@ -20,7 +20,8 @@ class WorkPool;
 /// Per-call bounds of server streams that compute ahead of their reader (SimulateShots).
 struct StreamLimits {
   int64_t window_bytes = 1 << 20;  ///< finished, unsent work per call (--stream_window_bytes)
-  /// A write that makes no progress this long ends the call (--stream_stall_timeout; 0: never).
+  /// A write that makes no progress this long ends the call, as does an upload that receives
+  /// nothing this long (--stream_stall_timeout; 0: never).
   absl::Duration stall_timeout = absl::Seconds(30);
   /// What UploadCalibration's uploads in progress may hold in all (--max_upload_bytes).
   int64_t upload_bytes = int64_t{64} << 20;

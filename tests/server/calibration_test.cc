@@ -3,7 +3,8 @@
 // preset back to it, with the report equal to the offline calibration's bit for bit; progress
 // in order; bad requests refused naming the field before any work; the CPU budget and the
 // client's cancellation stop the job. UploadCalibration: the same calibration in parts, each
-// within the default request limit, with its own checks and the server's upload budget.
+// within the default request limit, with its own checks, the server's upload budget and its stall
+// timeout.
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -355,6 +356,54 @@ TEST_F(CalibrationTest, BadUploadsAreInvalidArgumentNamingTheMessage) {
 
 // The uploads in progress share --max_upload_bytes: one that would pass it is refused, and
 // what a call held is given back when it ends.
+// An upload whose client sends a few parts and then nothing is ended after
+// --stream_stall_timeout, with the flag named, and gives its bytes back; an upload that sends
+// slowly but steadily, each part within the timeout, goes through, however long it takes in
+// all and however long its calibration then runs.
+TEST_F(CalibrationTest, AnUploadThatStallsIsEndedAndGivesItsBytesBack) {
+  config_.streams.stall_timeout = absl::Seconds(1);
+  config_.streams.upload_bytes = 80 << 10;  // one shot (about 64 KiB), not one and a half
+  Start();
+  v1::CalibrateTableRequest one = Request();
+  one.mutable_shots()->RemoveLast();
+  const std::vector<v1::CalibrationUpload> parts = cli::CalibrationUploadParts(one, 16 << 10);
+  ASSERT_GE(parts.size(), 4u);
+  {
+    std::unique_ptr<grpc::ClientContext> ctx = Ctx();
+    auto stream = stub_->UploadCalibration(ctx.get());
+    ASSERT_TRUE(stream->Write(parts[0]));
+    ASSERT_TRUE(stream->Write(parts[1]));
+    ASSERT_TRUE(stream->Write(parts[2]));
+    const auto t0 = std::chrono::steady_clock::now();
+    v1::CalibrateTableResponse r;
+    EXPECT_FALSE(stream->Read(&r));  // until the server ends the call
+    const grpc::Status st = stream->Finish();
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
+    EXPECT_THAT(st.error_message(), HasSubstr("sent nothing for 1s (--stream_stall_timeout)"));
+    EXPECT_GE(waited, 0.9);
+    EXPECT_LT(waited, 20.0);  // two alarm periods, and a sanitizer's slowness
+  }
+  // Its parts are given back before its status went out: the whole shot fits the budget
+  // again (it would not beside them), sent a part every 0.4 s, 0.4 s before the half-close.
+  std::vector<v1::CalibrateTableResponse> msgs;
+  std::unique_ptr<grpc::ClientContext> ctx = Ctx();
+  auto stream = stub_->UploadCalibration(ctx.get());
+  for (const v1::CalibrationUpload& part : parts) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(400));
+    ASSERT_TRUE(stream->Write(part));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(400));
+  stream->WritesDone();
+  v1::CalibrateTableResponse r;
+  while (stream->Read(&r)) msgs.push_back(r);
+  const grpc::Status st = stream->Finish();
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_FALSE(msgs.empty());
+  EXPECT_TRUE(msgs.back().has_report());
+}
+
 TEST_F(CalibrationTest, UploadsShareTheServersBudget) {
   config_.streams.upload_bytes = 96 << 10;  // less than the two shots' 130 kB
   Start();
