@@ -215,7 +215,7 @@ int Run() {
               "(server and clients)\n",
               w.tick_cores, (b.cpu - a.cpu) / secs);
 
-  for (auto& w : watches) w->Stop();
+  for (auto& watch : watches) watch->Stop();
   (*app)->Shutdown(absl::Seconds(1));
   (*app)->Wait();
   return 0;

@@ -745,10 +745,12 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   // parameters in turn (a strike that lags is fitted faster, which a livelier cloth makes up).
   const StrikeMap map{options.strike_bounds, 0.999 * spec.params.miscue_limit};
   std::vector<StrikeClock> clocks;
+  for (const Recording& rec : recordings) clocks.push_back(ClockOf(*model0, rec));
+  // Whether a training shot's time is to be freed (held-out shots are not in the joint fit).
   bool any_clock = false;
-  for (const Recording& rec : recordings) {
-    clocks.push_back(ClockOf(*model0, rec));
-    any_clock = any_clock || (clocks.back().fitted && !rec.strike);
+  for (int i : train) {
+    any_clock = any_clock || (clocks[static_cast<size_t>(i)].fitted &&
+                              !recordings[static_cast<size_t>(i)].strike);
   }
   bool free_time = false;
   std::vector<TimedStrike> strikes(static_cast<size_t>(shots));
