@@ -168,8 +168,6 @@ struct StrikeClock {
 };
 // A cue ball point this close to its spot is taken as still there (a tracker's noise).
 constexpr double kOnSpot = 0.003;
-// A cue ball this far from its spot has been struck.
-constexpr double kStruckDistance = 0.01;
 StrikeClock ClockOf(const TableModel& model, const Recording& rec) {
   StrikeClock c;
   if (rec.strike_time_s) {
@@ -741,8 +739,9 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   // The strikes' coordinates in the joint fit. An unknown strike time is held where the
   // shot's first motion put it (free, it would take up what the parameters get wrong: a late
   // strike for a slow cloth) until the parameters have settled; then a last solve frees it
-  // within a tenth of a frame of it (StrikeClock::Around), since a time off by a fraction of a millisecond biases the
-  // parameters in turn (a strike that lags is fitted faster, which a livelier cloth makes up).
+  // within a tenth of a frame of it (StrikeClock::Around), since a time off by a fraction of
+  // a millisecond biases the parameters in turn (a strike that lags is fitted faster, which a
+  // livelier cloth makes up).
   const StrikeMap map{options.strike_bounds, 0.999 * spec.params.miscue_limit};
   std::vector<StrikeClock> clocks;
   for (const Recording& rec : recordings) clocks.push_back(ClockOf(*model0, rec));
@@ -761,14 +760,6 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     StrikeMap m = map;
     m.clock = clocks[static_cast<size_t>(i)];
     return m;
-  };
-  // Frees the times, each around where it was held (StrikeClock::Around).
-  auto free_times = [&] {
-    free_time = true;
-    for (int i = 0; i < shots; ++i) {
-      clocks[static_cast<size_t>(i)] =
-          clocks[static_cast<size_t>(i)].Around(strikes[static_cast<size_t>(i)].time_s);
-    }
   };
 
   // 1. Every shot's strike under the starting parameters: the "before" report and the fit's
@@ -942,7 +933,12 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       f.last_x.resize(0);  // the strikes moved: no cached evaluation holds
     }
     if (any_clock && report.iterations < options.max_iterations) {
-      free_times();
+      // The times freed, each around where it was held.
+      free_time = true;
+      for (int i : train) {
+        clocks[static_cast<size_t>(i)] =
+            clocks[static_cast<size_t>(i)].Around(strikes[static_cast<size_t>(i)].time_s);
+      }
       f.last_x.resize(0);
       absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - report.iterations);
       if (!it.ok()) return it.status();

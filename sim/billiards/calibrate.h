@@ -39,6 +39,9 @@ namespace sportsim::billiards {
 
 /// Latest time a track may hold (s).
 inline constexpr double kMaxTrackTime = 3600.0;
+/// A ball tracked this far from where it stood (m) has been struck: how a track file names
+/// its struck ball, and where a strike fit reads the cue ball's first motion.
+inline constexpr double kStruckDistance = 0.01;
 
 /// One tracked position: ball `ball` (its index in Recording::initial) centred at `xy` (m, the
 /// table frame) at `t_s` (s on the track's clock; the strike is at Recording::strike_time_s).

@@ -107,7 +107,7 @@ absl::StatusOr<TrackFile> TrackBuilder::Finish() && {
     out_.spots.push_back(before_[b] ? *before_[b] : first_[b]->second);
   }
   for (const TrackPoint& p : out_.points) {
-    if ((p.xy - out_.spots[static_cast<size_t>(p.ball)]).norm() > 0.01) {
+    if ((p.xy - out_.spots[static_cast<size_t>(p.ball)]).norm() >= kStruckDistance) {
       out_.cue = p.ball;
       break;
     }

@@ -10,7 +10,7 @@
 // Lines starting with '#' and blank lines are skipped. Rows with t <= 0 say where a ball
 // stood before the strike (its last such row); a ball without one starts where it is first
 // tracked. Rows with t > 0 are its track. The struck ball is the first whose tracked position
-// leaves its spot by more than a centimetre (or one named by the caller).
+// leaves its spot by a centimetre, kStruckDistance (or one named by the caller).
 #ifndef SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
 #define SPORTSIM_SIM_BILLIARDS_TRACK_FILE_H_
 
