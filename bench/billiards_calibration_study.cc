@@ -19,6 +19,11 @@
 //    committed. --no-synthetic skips the synthetic recordings; --write-set FILE writes them as
 //    a shot set, in millimetres from a corner of the table (what --track-origin corner
 //    --track-scale 0.001 reads back), to try the importer on shots whose truth is known.
+//  - --false-detections F: a fraction F of the synthetic tracks' points are a tracker's false
+//    detections, anywhere on the table; every fit sees them, and every score is taken against
+//    the clean track (the same noise without them), the truth a false detection hides.
+//  - --huber M: every fit under Huber's loss with scale M metres (calibrate.h), instead of
+//    squared distances.
 //
 // For each model (han, mathavan2010, stronge), with the preset's constants, with its rolling resistance
 // alone fitted, and calibrated (its cloth and cushion constants fitted), each fit on the first
@@ -36,7 +41,7 @@
 //
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
-//          [--write-set FILE]
+//          [--write-set FILE] [--false-detections F] [--huber M]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -59,6 +64,9 @@ namespace {
 
 constexpr double kPredictWindow = 0.4;  // s
 
+// Every fit's Huber scale (m; 0: squared distances), --huber.
+double huber_m = 0.0;
+
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
   std::sort(v.begin(), v.end());
@@ -75,7 +83,7 @@ TableSpec ReferenceTable() {
   return s;
 }
 
-std::vector<Recording> Synthetic(int n, uint64_t seed) {
+std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections = 0.0) {
   const TableModel truth = *TableModel::Create(ReferenceTable());
   const double l = truth.spec().length_m, w = truth.spec().width_m, d = 2 * truth.radius();
   std::mt19937_64 rng(seed);
@@ -106,7 +114,8 @@ std::vector<Recording> Synthetic(int n, uint64_t seed) {
                          .noise_m = 1e-3,
                          .seed = seed + out.size(),
                          .strike_time_s = strike_time,
-                         .keep_strike_time = false});
+                         .keep_strike_time = false,
+                         .false_detections = false_detections});
     if (!r.ok()) continue;
     r->name = "synthetic" + std::to_string(out.size());
     out.push_back(*std::move(r));
@@ -231,28 +240,43 @@ Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike)
   return o;
 }
 
+// Where the struck ball was last tracked: the median of its last five points (each
+// coordinate), which a false detection among them does not move.
 Eigen::Vector2d LastTracked(const Recording& rec) {
-  for (auto it = rec.track.rbegin(); it != rec.track.rend(); ++it) {
-    if (it->ball == rec.cue) return it->xy;
+  std::vector<double> x, y;
+  for (auto it = rec.track.rbegin(); it != rec.track.rend() && x.size() < 5; ++it) {
+    if (it->ball != rec.cue) continue;
+    x.push_back(it->xy.x());
+    y.push_back(it->xy.y());
   }
-  return rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
+  if (x.empty()) return rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
+  return Eigen::Vector2d(Median(x), Median(y));
 }
 
+// Scores the strikes fitted to `test` against `truth` (the same shots' clean tracks, or
+// `test` itself).
 void Score(const std::string& source, const std::string& model_name, const std::string& constants,
-           const TableSpec& spec, const std::vector<Recording>& test) {
+           const TableSpec& spec, const std::vector<Recording>& test,
+           const std::vector<Recording>& truth) {
   const TableModel m = *TableModel::Create(spec);
   std::vector<double> fit, final_err, cpu;
   int fit_rails = 0, predict_rails = 0, n = 0;
-  for (const Recording& rec : test) {
-    absl::StatusOr<StrikeFit> whole = FitStrike(m, SolverOptions{}, rec);
-    absl::StatusOr<StrikeFit> early = FitStrike(m, SolverOptions{}, rec, StrikeBounds{}, kPredictWindow);
+  for (size_t i = 0; i < test.size(); ++i) {
+    const Recording& rec = test[i];
+    const Recording& clean = truth[i];
+    absl::StatusOr<StrikeFit> whole = FitStrike(m, SolverOptions{}, rec, StrikeBounds{}, 1e300, huber_m);
+    absl::StatusOr<StrikeFit> early =
+        FitStrike(m, SolverOptions{}, rec, StrikeBounds{}, kPredictWindow, huber_m);
     if (!whole.ok() || !early.ok()) continue;
+    absl::StatusOr<ShotError> scored =
+        ScoreShot(m, SolverOptions{}, clean, whole->strike, 1e300, whole->strike_time_s);
+    if (!scored.ok()) continue;
     ++n;
-    fit.push_back(whole->error.mean_m);
+    fit.push_back(scored->mean_m);
     const Outcome best = Play(m, rec, whole->strike);
     const Outcome predicted = Play(m, rec, early->strike);
-    final_err.push_back((predicted.rest - LastTracked(rec)).norm());
-    const std::vector<Rail> recorded = FirstThree(TrackedRails(m, rec, rec.cue));
+    final_err.push_back((predicted.rest - LastTracked(clean)).norm());
+    const std::vector<Rail> recorded = FirstThree(TrackedRails(m, clean, clean.cue));
     fit_rails += best.rails == recorded;
     predict_rails += predicted.rails == recorded;
     cpu.push_back(best.cpu_s);
@@ -264,10 +288,15 @@ void Score(const std::string& source, const std::string& model_name, const std::
   std::fflush(stdout);
 }
 
-void Study(const std::string& source, const TableSpec& preset, const std::vector<Recording>& all) {
+// Fits on the first half of `all`, scores on the second half against `truths` (the clean
+// tracks of the same shots; `all` itself when empty).
+void Study(const std::string& source, const TableSpec& preset, const std::vector<Recording>& all,
+           const std::vector<Recording>& truths = {}) {
   const size_t half = all.size() / 2;
   const std::vector<Recording> train(all.begin(), all.begin() + static_cast<long>(half));
   const std::vector<Recording> test(all.begin() + static_cast<long>(half), all.end());
+  const std::vector<Recording>& clean_all = truths.empty() ? all : truths;
+  const std::vector<Recording> truth(clean_all.begin() + static_cast<long>(half), clean_all.end());
   for (CushionModel cm : {CushionModel::kHan, CushionModel::kMathavan2010,
                           CushionModel::kStrongeCompliant}) {
     const std::string name = cm == CushionModel::kHan            ? "han"
@@ -275,16 +304,18 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
                                                                  : "stronge";
     TableSpec spec = preset;
     spec.params.cushion_model = cm;
-    Score(source, name, "preset", spec, test);
+    Score(source, name, "preset", spec, test, truth);
     // The rolling resistance alone: what one constant from the right cloth is worth.
     CalibrationOptions roll;
     roll.params.push_back({.name = "mu_roll"});
+    roll.huber_m = huber_m;
     if (absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, train, roll); r.ok()) {
       TableSpec s = spec;
       s.params = r->params;
-      Score(source, name, "rolling_only", s, test);
+      Score(source, name, "rolling_only", s, test, truth);
     }
     CalibrationOptions o;
+    o.huber_m = huber_m;
     for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2"}) o.params.push_back({.name = p});
     if (cm != CushionModel::kMathavan2010) {
       o.params.push_back({.name = "e_cushion"});
@@ -304,7 +335,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
                    p.before, p.after);
     }
     spec.params = r->params;
-    Score(source, name, "calibrated", spec, test);
+    Score(source, name, "calibrated", spec, test, truth);
   }
 }
 
@@ -316,7 +347,7 @@ int main(int argc, char** argv) {
   int shots = 24, recorded_shots = 0;
   bool synthetic = true;
   std::string path, preset = "carom", origin = "centre", write_set;
-  double scale = 1.0;
+  double scale = 1.0, false_detections = 0.0;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
       shots = 4;
@@ -336,11 +367,24 @@ int main(int argc, char** argv) {
       write_set = argv[++i];
     } else if (!std::strcmp(argv[i], "--recorded-shots") && i + 1 < argc) {
       recorded_shots = std::max(2, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--false-detections") && i + 1 < argc) {
+      false_detections = std::atof(argv[++i]);
+      if (!(false_detections >= 0.0 && false_detections <= 0.5)) {
+        std::fprintf(stderr, "--false-detections: a fraction in [0, 0.5]\n");
+        return 2;
+      }
+    } else if (!std::strcmp(argv[i], "--huber") && i + 1 < argc) {
+      huber_m = std::atof(argv[++i]);
+      if (!(huber_m >= 0.0 && huber_m <= kMaxHuberScale)) {
+        std::fprintf(stderr, "--huber: a scale in [0, %g] m\n", kMaxHuberScale);
+        return 2;
+      }
     } else {
       std::fprintf(stderr,
                    "usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] "
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
-                   "[--track-scale S] [--recorded-shots N] [--write-set FILE]\n");
+                   "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
+                   "[--false-detections F] [--huber M]\n");
       return 2;
     }
   }
@@ -349,7 +393,14 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: cannot write\n", write_set.c_str());
     return 1;
   }
-  if (synthetic) Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33));
+  if (synthetic) {
+    if (false_detections > 0.0) {
+      Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33, false_detections),
+            Synthetic(shots, 33));
+    } else {
+      Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33));
+    }
+  }
   if (!path.empty()) {
     absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);
     if (!spec.ok()) {

@@ -142,7 +142,9 @@ class Budget {
 
 // When a recording's strike happened on its track's clock: known, or fitted within
 // [lo, hi] from t0. The bounds and the start are read from the cue ball's track alone (no
-// model): the strike comes before the first point a centimetre away from the spot, and after
+// model): the strike comes before the first point a centimetre away from the spot (and
+// followed by another away: a single point away between points on the spot is a tracker's
+// false detection, not the strike), and after
 // the point before the last one still on the spot (not the last itself: a ball struck just
 // before it is still within the tracker's noise of its spot there), and the first two points
 // away from it, extrapolated back to the spot at their speed, say when.
@@ -168,6 +170,17 @@ struct StrikeClock {
 };
 // A cue ball point this close to its spot is taken as still there (a tracker's noise).
 constexpr double kOnSpot = 0.003;
+
+// The struck ball's tracked points, in order.
+std::vector<const TrackPoint*> CuePoints(const Recording& rec) {
+  std::vector<const TrackPoint*> out;
+  for (const TrackPoint& p : rec.track) {
+    if (p.ball == rec.cue) out.push_back(&p);
+  }
+  return out;
+}
+
+
 StrikeClock ClockOf(const TableModel& model, const Recording& rec) {
   StrikeClock c;
   if (rec.strike_time_s) {
@@ -175,21 +188,29 @@ StrikeClock ClockOf(const TableModel& model, const Recording& rec) {
     return c;
   }
   const Eigen::Vector2d spot = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
-  const TrackPoint* first = nullptr;   // the first cue ball point away from its spot
+  const TrackPoint* first = nullptr;   // the first cue ball point of its departure
   const TrackPoint* second = nullptr;  // the cue ball's point after it
   double previous = 0.0;               // the cue ball's last point's time
-  for (const TrackPoint& p : rec.track) {
-    if (p.ball != rec.cue) continue;
-    if (first != nullptr) {
-      second = &p;
+  const std::vector<const TrackPoint*> cue = CuePoints(rec);
+  for (size_t k = 0; k < cue.size(); ++k) {
+    const TrackPoint& p = *cue[k];
+    const double d = (p.xy - spot).norm();
+    if (k + 1 < cue.size() && Departs(spot, p, *cue[k + 1])) {
+      first = &p;
+      second = cue[k + 1];
       break;
     }
-    if ((p.xy - spot).norm() >= kStruckDistance) {
-      first = &p;
-    } else if ((p.xy - spot).norm() <= kOnSpot) {
-      c.lo = previous;
-    }
+    if (d <= kOnSpot) c.lo = previous;
     previous = p.t_s;
+  }
+  if (first == nullptr && !cue.empty()) {
+    // A track that ends a point into the motion: its first point away, if any.
+    for (const TrackPoint* p : cue) {
+      if ((p->xy - spot).norm() >= kStruckDistance) {
+        first = p;
+        break;
+      }
+    }
   }
   if (first == nullptr) return c;  // never struck: FitStrike says so
   c.hi = first->t_s;
@@ -274,15 +295,21 @@ struct StrikeMap {
 std::optional<std::pair<double, double>> FirstMotion(const TableModel& model, const Recording& rec,
                                                      const StrikeClock& clock) {
   const Eigen::Vector2d start = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
-  for (const TrackPoint& p : rec.track) {
-    const double dt = p.t_s - clock.t0;
-    if (p.ball != rec.cue || dt <= 0.0) continue;
-    const Eigen::Vector2d d = p.xy - start;
-    if (d.norm() < kStruckDistance) continue;
-    const double speed = d.norm() / dt + 0.5 * model.params().mu_slide * model.params().gravity_mps2 * dt;
-    return std::make_pair(std::atan2(d.y(), d.x()), speed);
+  const std::vector<const TrackPoint*> cue = CuePoints(rec);
+  const TrackPoint* first = nullptr;
+  for (size_t k = 0; k < cue.size() && first == nullptr; ++k) {
+    if (cue[k]->t_s <= clock.t0) continue;
+    // The departure (ClockOf's), or for a track that ends a point into the motion its last.
+    if (k + 1 < cue.size() ? Departs(start, *cue[k], *cue[k + 1])
+                           : (cue[k]->xy - start).norm() >= kStruckDistance) {
+      first = cue[k];
+    }
   }
-  return std::nullopt;
+  if (first == nullptr) return std::nullopt;
+  const double dt = first->t_s - clock.t0;
+  const Eigen::Vector2d d = first->xy - start;
+  const double speed = d.norm() / dt + 0.5 * model.params().mu_slide * model.params().gravity_mps2 * dt;
+  return std::make_pair(std::atan2(d.y(), d.x()), speed);
 }
 
 // Levenberg-Marquardt over a residual function of the unbounded coordinates, with its Jacobian
@@ -335,27 +362,72 @@ absl::StatusOr<int> Minimize(LmFunctor& functor, VectorXd* x, int max_iterations
   return iterations;
 }
 
-// A shot's fit context: the residual count and weight of the points it is fitted on.
+// A shot's fit context: the residual count and weight of the points it is fitted on, and the
+// fit's Huber scale (0: squared distances).
 struct ShotPoints {
   int n = 0;
   double weight = 0.0;
+  double huber_m = 0.0;
 };
-ShotPoints PointsOf(const Recording& rec, double until_s) {
+ShotPoints PointsOf(const Recording& rec, double until_s, double huber_m) {
   ShotPoints p;
   p.n = PointsUntil(rec, until_s);
   p.weight = p.n > 0 ? 1.0 / std::sqrt(static_cast<double>(p.n)) : 0.0;
+  p.huber_m = huber_m;
   return p;
 }
 
-// Residuals of one shot, with a failed simulation's large ones in place of an error (budget and
-// cancellation errors pass through).
+// Residuals scaled so that their squares sum to Huber's loss: a point's pair (its distance d,
+// unweighted) keeps its direction and takes the length sqrt(2 h d - h^2) beyond the scale h.
+// A least-squares fit of these minimises the loss (Levenberg-Marquardt's Gauss-Newton model of
+// it is the square-root one, which holds up for Huber's loss: it is convex and its root is
+// smooth but at h, where it is continuous with its slope).
+void Robust(const ShotPoints& pts, double* r) {
+  if (pts.huber_m <= 0.0) return;
+  const double h = pts.huber_m;
+  for (int i = 0; i < pts.n; ++i) {
+    const double d = std::hypot(r[2 * i], r[2 * i + 1]) / pts.weight;
+    if (d <= h) continue;
+    const double scale = std::sqrt(2.0 * h * d - h * h) / d;
+    r[2 * i] *= scale;
+    r[2 * i + 1] *= scale;
+  }
+}
+
+// Residuals of one shot under the fit's loss, with a failed simulation's large ones in place of
+// an error (budget and cancellation errors pass through).
 absl::Status Simulate(const TableModel& model, const SolverOptions& solver, const Recording& rec,
                       const TimedStrike& strike, const ShotPoints& pts, Budget* budget, double* out) {
   if (absl::Status s = budget->Take(); !s.ok()) return s;
   if (!ShotResiduals(model, solver, rec, strike, pts.n, pts.weight, out).ok()) {
     std::fill(out, out + 2 * pts.n, kFailedResidual * pts.weight);
   }
+  Robust(pts, out);
   return absl::OkStatus();
+}
+
+// A shot's loss under the fit (the sum of its squared residuals) and its plain score, from one
+// simulation.
+struct Scored {
+  double loss = 0.0;
+  ShotError error;
+};
+absl::StatusOr<Scored> ScoreOn(const TableModel& model, const SolverOptions& solver,
+                               const Recording& rec, const TimedStrike& strike,
+                               const ShotPoints& pts, Budget* budget) {
+  ShotPoints plain = pts;
+  plain.huber_m = 0.0;
+  VectorXd r(2 * pts.n);
+  if (absl::Status s = Simulate(model, solver, rec, strike, plain, budget, r.data()); !s.ok()) {
+    return s;
+  }
+  Scored out;
+  VectorXd robust = r;
+  Robust(pts, robust.data());
+  out.loss = robust.squaredNorm();
+  r /= pts.weight;
+  out.error = ErrorOf(r.data(), pts.n);
+  return out;
 }
 
 // The windows a strike is fitted over in turn, as times on the track's clock: the first
@@ -378,10 +450,10 @@ std::vector<double> Windows(const Recording& rec, const StrikeClock& clock, doub
 constexpr double kTipPrior = 1e-3;
 constexpr int kStrikeIterations = 30;  // LM iterations of a strike's fit on one window
 absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, const Recording& rec,
-                          const StrikeMap& map, double window, const VectorXd* prior,
+                          const StrikeMap& map, double window, double huber_m, const VectorXd* prior,
                           int iterations, Budget* budget, VectorXd* u) {
   const int k = map.size();
-  const ShotPoints pts = PointsOf(rec, window);
+  const ShotPoints pts = PointsOf(rec, window, huber_m);
   if (2 * pts.n < k) return absl::OkStatus();  // too early to say anything: keep the start
   const int extra = prior != nullptr ? 2 : 0;
   auto residuals = [&](const VectorXd& x, double* r) {
@@ -412,14 +484,16 @@ absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, 
 // FitStrike's work, on a budget. With free_time an unknown strike time is, at the end,
 // refined with the rest of the best start's strike over the whole window (the best fit under
 // this table); without, it stays where the first motion put it (for the calibration's passes,
-// in which it must not take up the table's errors).
+// in which it must not take up the table's errors). `loss`, when given, is set to the fit's
+// loss over the window (Simulate's residuals' sum of squares).
 absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptions& solver,
                                       const Recording& rec, const StrikeBounds& bounds,
-                                      double until_s, Budget* budget, bool free_time) {
+                                      double until_s, double huber_m, Budget* budget,
+                                      bool free_time, double* loss = nullptr) {
   StrikeFit best;
   const int64_t used0 = budget->used();
   const StrikeClock clock = ClockOf(model, rec);
-  const ShotPoints all = PointsOf(rec, clock.t0 + until_s);
+  const ShotPoints all = PointsOf(rec, clock.t0 + until_s, huber_m);
   if (all.n == 0) return absl::InvalidArgumentError("track: no points in the fitted window");
   StrikeMap map{bounds, 0.999 * model.params().miscue_limit, clock};
   const int k = map.size();
@@ -454,8 +528,8 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
     StrikeMap fitting = map;
     for (size_t w = 0; w < windows.size(); ++w) {
       const bool last = w + 1 == windows.size();
-      if (absl::Status s = RefineStrike(model, solver, rec, fitting, windows[w], last ? nullptr : &u0,
-                                        kStrikeIterations, budget, &u);
+      if (absl::Status s = RefineStrike(model, solver, rec, fitting, windows[w], huber_m,
+                                        last ? nullptr : &u0, kStrikeIterations, budget, &u);
           !s.ok()) {
         return s;
       }
@@ -464,18 +538,14 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
         u.conservativeResize(fitting.size());  // the time was the last coordinate
       }
     }
-    VectorXd r(2 * all.n);
     const TimedStrike timed = fitting.ToTimed(u.data());
-    if (absl::Status s = Simulate(model, solver, rec, timed, all, budget, r.data()); !s.ok()) {
-      return s;
-    }
-    const double cost = r.squaredNorm();
-    if (cost < best_cost) {
-      best_cost = cost;
+    absl::StatusOr<Scored> scored = ScoreOn(model, solver, rec, timed, all, budget);
+    if (!scored.ok()) return scored.status();
+    if (scored->loss < best_cost) {
+      best_cost = scored->loss;
       best.strike = timed.strike;
       best.strike_time_s = timed.time_s;
-      for (int i = 0; i < all.n; ++i) r.segment(2 * i, 2) /= all.weight;
-      best.error = ErrorOf(r.data(), all.n);
+      best.error = scored->error;
     }
   }
   StrikeMap polish = map;
@@ -483,23 +553,23 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
   if (free_time && polish.clock.fitted) {
     VectorXd u(polish.size());
     polish.FromTimed({best.strike, best.strike_time_s}, u.data());
-    if (absl::Status s = RefineStrike(model, solver, rec, polish, windows.back(), nullptr,
+    if (absl::Status s = RefineStrike(model, solver, rec, polish, windows.back(), huber_m, nullptr,
                                       kStrikeIterations, budget, &u);
         !s.ok()) {
       return s;
     }
     const TimedStrike timed = polish.ToTimed(u.data());
-    VectorXd r(2 * all.n);
-    if (absl::Status s = Simulate(model, solver, rec, timed, all, budget, r.data()); !s.ok()) {
-      return s;
-    }
-    if (r.squaredNorm() < best_cost) {  // LM keeps the best point it saw: never worse but for rounding
+    absl::StatusOr<Scored> scored = ScoreOn(model, solver, rec, timed, all, budget);
+    if (!scored.ok()) return scored.status();
+    // LM keeps the best point it saw: never worse but for rounding.
+    if (scored->loss < best_cost) {
+      best_cost = scored->loss;
       best.strike = timed.strike;
       best.strike_time_s = timed.time_s;
-      for (int i = 0; i < all.n; ++i) r.segment(2 * i, 2) /= all.weight;
-      best.error = ErrorOf(r.data(), all.n);
+      best.error = scored->error;
     }
   }
+  if (loss != nullptr) *loss = best_cost;
   best.strike.phi_rad = std::remainder(best.strike.phi_rad, 2.0 * std::numbers::pi);
   best.simulations = budget->used() - used0;
   return best;
@@ -517,7 +587,22 @@ absl::Status CheckOptions(const StrikeBounds& b) {
   return absl::OkStatus();
 }
 
+absl::Status CheckHuber(double huber_m) {
+  if (!(huber_m >= 0.0 && huber_m <= kMaxHuberScale)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "huber_m must be in [0, %g] m (0: squared distances), got %g", kMaxHuberScale, huber_m));
+  }
+  return absl::OkStatus();
+}
+
 }  // namespace
+
+bool Departs(const Eigen::Vector2d& spot, const TrackPoint& p, const TrackPoint& q) {
+  const Eigen::Vector2d a = p.xy - spot, b = q.xy - spot;
+  const double na = a.norm(), nb = b.norm();
+  return na >= kStruckDistance && nb > na &&
+         a.dot(b) >= std::cos(kDepartureDeg * std::numbers::pi / 180.0) * na * nb;
+}
 
 absl::Status ValidateRecording(const TableModel& model, const Recording& rec) {
   if (absl::Status s = ValidateLayout(model, rec.initial); !s.ok()) {
@@ -587,11 +672,12 @@ absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions
 
 absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions& solver,
                                     const Recording& rec, const StrikeBounds& bounds,
-                                    double until_s) {
+                                    double until_s, double huber_m) {
   if (absl::Status s = ValidateRecording(model, rec); !s.ok()) return s;
   if (absl::Status s = CheckOptions(bounds); !s.ok()) return s;
+  if (absl::Status s = CheckHuber(huber_m); !s.ok()) return s;
   Budget budget(std::numeric_limits<int64_t>::max(), nullptr);
-  return FitStrikeOn(model, solver, rec, bounds, until_s, &budget, /*free_time=*/true);
+  return FitStrikeOn(model, solver, rec, bounds, until_s, huber_m, &budget, /*free_time=*/true);
 }
 
 std::optional<std::pair<double, double>> CalibrationRange(std::string_view name) {
@@ -649,6 +735,7 @@ absl::StatusOr<Prepared> Prepare(const TableSpec& spec, const SolverOptions& sol
   if (!(options.strike_window_s > 0.0)) {
     return absl::InvalidArgumentError("strike_window_s must be > 0");
   }
+  if (absl::Status s = CheckHuber(options.huber_m); !s.ok()) return s;
   const int shots = static_cast<int>(recordings.size());
   for (int i = 0; i < shots; ++i) {
     if (absl::Status s = ValidateRecording(*model0, recordings[static_cast<size_t>(i)]); !s.ok()) {
@@ -730,7 +817,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   std::vector<ShotPoints> pts(static_cast<size_t>(shots));
   int rows = 0;
   for (int i : train) {
-    pts[static_cast<size_t>(i)] = PointsOf(recordings[static_cast<size_t>(i)], 1e300);
+    pts[static_cast<size_t>(i)] = PointsOf(recordings[static_cast<size_t>(i)], 1e300, options.huber_m);
     row0[static_cast<size_t>(i)] = rows;
     rows += 2 * pts[static_cast<size_t>(i)].n;
   }
@@ -773,8 +860,9 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     if (rec.strike) {
       strikes[static_cast<size_t>(i)] = {*rec.strike, *rec.strike_time_s};
     } else {
-      absl::StatusOr<StrikeFit> fit = FitStrikeOn(*model0, solver, rec, options.strike_bounds,
-                                                  window, &budget, /*free_time=*/!joint || sr.heldout);
+      absl::StatusOr<StrikeFit> fit =
+          FitStrikeOn(*model0, solver, rec, options.strike_bounds, window, options.huber_m, &budget,
+                      /*free_time=*/!joint || sr.heldout);
       if (!fit.ok()) {
         return absl::Status(fit.status().code(),
                             absl::StrFormat("recordings[%d]: %s", i, fit.status().message()));
@@ -839,8 +927,8 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
         const StrikeMap sm = map_of(i);
         VectorXd su(sm.size());
         sm.FromTimed(anchor[static_cast<size_t>(i)], su.data());
-        if (absl::Status st = RefineStrike(*m, solver, rec, sm, 1e300, nullptr, kRefitIterations,
-                                           &budget, &su);
+        if (absl::Status st = RefineStrike(*m, solver, rec, sm, 1e300, options.huber_m, nullptr,
+                                           kRefitIterations, &budget, &su);
             !st.ok()) {
           return st;
         }
@@ -919,10 +1007,12 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
         if (rec.strike) continue;
         const ShotPoints& sp = pts[static_cast<size_t>(i)];
         const double now = r.segment(row0[static_cast<size_t>(i)], 2 * sp.n).squaredNorm();
-        absl::StatusOr<StrikeFit> fresh =
-            FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300, &budget, /*free_time=*/false);
+        double loss = 0.0;
+        absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300,
+                                                      options.huber_m, &budget,
+                                                      /*free_time=*/false, &loss);
         if (!fresh.ok()) return fresh.status();
-        if (fresh->error.rms_m * fresh->error.rms_m < (1.0 - 1e-3) * now) {
+        if (loss < (1.0 - 1e-3) * now) {
           strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
           changed = true;
         }
@@ -963,8 +1053,9 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     const Recording& rec = recordings[static_cast<size_t>(i)];
     ShotReport& sr = report.shots[static_cast<size_t>(i)];
     if (sr.heldout && !rec.strike) {
-      absl::StatusOr<StrikeFit> fit = FitStrikeOn(*model1, solver, rec, options.strike_bounds,
-                                                  options.strike_window_s, &budget, /*free_time=*/true);
+      absl::StatusOr<StrikeFit> fit =
+          FitStrikeOn(*model1, solver, rec, options.strike_bounds, options.strike_window_s,
+                      options.huber_m, &budget, /*free_time=*/true);
       if (!fit.ok()) return fit.status();
       strikes[static_cast<size_t>(i)] = {fit->strike, fit->strike_time_s};
     }
@@ -1136,6 +1227,9 @@ absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const Solv
   if (!(options.strike_time_s >= 0.0 && options.strike_time_s < options.max_s)) {
     return absl::InvalidArgumentError("strike_time_s must be in [0, max_s)");
   }
+  if (!(options.false_detections >= 0.0 && options.false_detections <= 1.0)) {
+    return absl::InvalidArgumentError("false_detections must be in [0, 1]");
+  }
   Recording rec;
   rec.initial = initial;
   rec.initial.t_s = 0.0;
@@ -1153,6 +1247,10 @@ absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const Solv
   if (!sim.ok()) return sim.status();
   std::mt19937_64 rng(options.seed);
   std::normal_distribution<double> noise(0.0, 1.0);
+  // False detections from their own generator, so that the noise is the same with or without.
+  std::mt19937_64 false_rng(options.seed ^ 0x5eed'fa15'e0de'7ec7ULL);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const Eigen::Vector2d area(model.spec().length_m, model.spec().width_m);
   for (int64_t k = 1;; ++k) {
     const double t = static_cast<double>(k) / options.rate_hz;
     if (t > options.max_s) break;
@@ -1168,6 +1266,11 @@ absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const Solv
       if (options.noise_m > 0.0) {
         p.xy.x() += options.noise_m * noise(rng);
         p.xy.y() += options.noise_m * noise(rng);
+      }
+      if (options.false_detections > 0.0 && unit(false_rng) < options.false_detections) {
+        const double fx = unit(false_rng) - 0.5;
+        const double fy = unit(false_rng) - 0.5;
+        p.xy = Eigen::Vector2d(fx, fy).cwiseProduct(area);
       }
       rec.track.push_back(p);
     }

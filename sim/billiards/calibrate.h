@@ -12,7 +12,11 @@
 // minimises the sum over shots of each shot's mean squared distance (each shot weighs the
 // same whatever its length or frame rate), by Levenberg-Marquardt (Eigen's) in an unbounded
 // coordinate per parameter (a logistic map onto its bounds), with forward differences for the
-// Jacobian. A shot's strike starts from the cue ball's first tracked motion and several tip
+// Jacobian. With a Huber scale (CalibrationOptions::huber_m) each point's squared distance d^2
+// is replaced by Huber's loss, d^2 up to the scale and 2 huber_m d - huber_m^2 beyond it, so
+// that a tracker's false detections (a reflection, a hand, two balls' labels swapped) pull the
+// fit no harder than a point the scale away; the reported scores stay the plain distances.
+// A shot's strike starts from the cue ball's first tracked motion and several tip
 // offsets, each refined, the best kept. The joint fit then moves the table's parameters and
 // every training shot's strike together. Held-out shots never inform the table's parameters:
 // their strikes are fitted before and after, with the table's parameters fixed, to report the
@@ -51,6 +55,18 @@ struct TrackPoint {
   Eigen::Vector2d xy = Eigen::Vector2d::Zero();
 };
 
+/// Largest angle (degrees) between a ball's first two points away from its spot, seen from
+/// the spot, for them to be its departure (Departs).
+inline constexpr double kDepartureDeg = 15.0;
+
+/// Whether a ball's tracked point p, followed by its next point q, is its departure from its
+/// spot: both kStruckDistance away or more, q farther, and in the same direction from the spot
+/// within kDepartureDeg (a struck ball's first motion is straight, or nearly, whatever its
+/// spin). A tracker's false detection (a reflection, a hand, another ball's label) lands
+/// anywhere, and two in a row hardly ever line up so: a shot starts at a departure, not at a
+/// point away.
+bool Departs(const Eigen::Vector2d& spot, const TrackPoint& p, const TrackPoint& q);
+
 /// A recorded shot.
 struct Recording {
   std::string name;
@@ -63,7 +79,8 @@ struct Recording {
   /// strike: it may run for a while before it, and at 50 Hz the strike falls anywhere within
   /// a 20 ms frame, which a 3 m/s ball crosses 6 cm of. nullopt: unknown, fitted with the
   /// strike, between the cue ball's last tracked point on its spot (within 3 mm; else 0) and
-  /// its first a centimetre away. A known strike needs a known time.
+  /// its departure (Departs: a point away alone may be a tracker's false detection). A known
+  /// strike needs a known time.
   std::optional<double> strike_time_s = 0.0;
 };
 
@@ -112,9 +129,14 @@ struct StrikeFit {
   ShotError error;        ///< over the points fitted
   int64_t simulations = 0;
 };
+/// huber_m > 0 fits under Huber's loss with that scale (m; see the top of this file), 0 under
+/// squared distances.
 absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions& solver,
                                     const Recording& recording, const StrikeBounds& bounds = {},
-                                    double until_s = 1e300);
+                                    double until_s = 1e300, double huber_m = 0.0);
+
+/// Largest Huber scale a fit takes (m).
+inline constexpr double kMaxHuberScale = 1.0;
 
 /// A table parameter to fit (a ParamInfos() name) and its bounds; lo = hi = 0 takes the
 /// published range of CalibrationRange (or, for parameters without one, the parameter's
@@ -142,6 +164,10 @@ struct CalibrationOptions {
   /// them, at least one of two or more, go to the last solve, which frees the times).
   int max_iterations = 60;
   int64_t max_simulations = 2000000;  ///< budget over the whole calibration
+  /// Huber's scale (m) for every fit (0: squared distances). A scale a few times the
+  /// tracker's noise and below the model's error (2 cm, say) makes the fit robust to false
+  /// detections; the reports' distances are the plain ones either way.
+  double huber_m = 0.0;
   std::function<bool()> cancelled;  ///< polled between simulations: Cancelled
   /// Called as the calibration goes: the fraction done (0..1) and the stage's name.
   std::function<void(double, std::string_view)> progress;
@@ -212,7 +238,10 @@ std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> e
 /// tracker's clock, every ball on the table tracked at `rate_hz` (at t = k / rate_hz, k >= 1)
 /// until all rest after the strike (at most max_s), each coordinate with Gaussian noise of
 /// sigma noise_m (seeded; 0: exact). The strike is kept in the recording only when
-/// keep_strike, its time when keep_strike or keep_strike_time.
+/// keep_strike, its time when keep_strike or keep_strike_time. A fraction
+/// false_detections of the points (drawn with their own generator from the seed, so that the
+/// noise stays the same) are a tracker's false detections: somewhere on the playing area,
+/// uniformly, instead of where the ball is.
 struct SyntheticOptions {
   double rate_hz = 50.0;
   double noise_m = 0.0;
@@ -221,6 +250,7 @@ struct SyntheticOptions {
   bool keep_strike = false;
   double strike_time_s = 0.0;
   bool keep_strike_time = true;
+  double false_detections = 0.0;
 };
 absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,
                                              const TableState& initial, int cue,

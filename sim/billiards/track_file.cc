@@ -106,12 +106,21 @@ absl::StatusOr<TrackFile> TrackBuilder::Finish() && {
   for (size_t b = 0; b < out_.balls.size(); ++b) {
     out_.spots.push_back(before_[b] ? *before_[b] : first_[b]->second);
   }
+  // The struck ball: the first to depart from its spot (Departs: a point away and the next
+  // farther along the same line; a single point away is a tracker's false detection), else the
+  // first seen away at all.
+  std::vector<const TrackPoint*> last(out_.balls.size(), nullptr);
+  std::optional<int> once;
   for (const TrackPoint& p : out_.points) {
-    if ((p.xy - out_.spots[static_cast<size_t>(p.ball)]).norm() >= kStruckDistance) {
+    const size_t b = static_cast<size_t>(p.ball);
+    if (last[b] != nullptr && Departs(out_.spots[b], *last[b], p)) {
       out_.cue = p.ball;
       break;
     }
+    last[b] = &p;
+    if (!once && (p.xy - out_.spots[b]).norm() >= kStruckDistance) once = p.ball;
   }
+  if (out_.cue < 0 && once) out_.cue = *once;
   return std::move(out_);
 }
 

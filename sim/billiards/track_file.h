@@ -33,7 +33,7 @@ namespace sportsim::billiards {
 struct TrackFile {
   std::vector<std::string> balls;        ///< ids, in order of first appearance
   std::vector<Eigen::Vector2d> spots;    ///< where each stood before the strike
-  int cue = -1;                          ///< the first ball to move (index), -1: none moved
+  int cue = -1;  ///< the first ball to depart from its spot (index; Departs), -1: none moved
   std::vector<TrackPoint> points;        ///< t > 0, in time order (a file's order among ties)
 };
 

@@ -51,6 +51,23 @@ TEST(TrackFileTest, HeaderColumnsInAnyOrderAndCase) {
   EXPECT_EQ(f->cue, 0);
 }
 
+// A ball seen off its spot in a single frame is a tracker's false detection: the struck ball
+// is the first to depart (a point away, then one farther along the same line); a ball seen
+// away only once is the struck one when no ball departs.
+TEST(TrackFileTest, TheStruckBallIsTheFirstToDepart) {
+  absl::StatusOr<TrackFile> f = ParseTrackCsv(
+      "t,ball,x,y\n0,white,-0.5,0.1\n0,red,0.5,0\n"
+      "0.02,white,-0.5,0.1\n0.02,red,0.9,0.3\n"   // red's false detection
+      "0.04,white,-0.5,0.1\n0.04,red,0.5,0\n"
+      "0.06,white,-0.46,0.1\n0.06,red,0.5,0\n"
+      "0.08,white,-0.42,0.1\n0.08,red,0.5,0\n");
+  ASSERT_TRUE(f.ok()) << f.status();
+  EXPECT_EQ(f->cue, 0);
+  f = ParseTrackCsv("t,ball,x,y\n0,white,-0.5,0.1\n0,red,0.5,0\n0.02,red,0.9,0.3\n0.04,white,-0.5,0.1\n");
+  ASSERT_TRUE(f.ok()) << f.status();
+  EXPECT_EQ(f->cue, 1);
+}
+
 TEST(TrackFileTest, RefusesMalformedFilesNamingTheLine) {
   auto message = [](const std::string& text) {
     absl::StatusOr<TrackFile> f = ParseTrackCsv(text);
