@@ -268,6 +268,8 @@ std::vector<CommandSpec> MakeSpecs() {
               {"max_simulations", "simulations in all, [1, 1e9] (default 2000000)"},
               {"cue_ball", "the struck ball in every file (default: the first to move a cm)"},
               {"fit_elevation", "fit the cue's elevation too (default level)"},
+              {"huber", "Huber's scale in metres, [0, 1]: false detections pull the fit as "
+                        "hard as a point this far (default: squared distances)"},
               {"track_origin", "where the files' (0, 0) is: centre (default, the table frame) "
                                "or corner (of the playing area, x along its length)"},
               {"track_scale", "metres per unit of the files' coordinates (default 1)"}}})},

@@ -84,6 +84,9 @@ ABSL_FLAG(std::optional<int64_t>, max_simulations, std::nullopt,
 ABSL_FLAG(std::string, cue_ball, "",
           "table calibrate: the struck ball in every file (default: the first ball to move)");
 ABSL_FLAG(bool, fit_elevation, false, "table calibrate: fit the cue's elevation too");
+ABSL_FLAG(std::optional<double>, huber, std::nullopt,
+          "table calibrate: Huber's scale in metres, [0, 1], for trackers' false detections "
+          "(default: squared distances)");
 ABSL_FLAG(std::string, track_origin, "centre",
           "table calibrate: where the files' (0, 0) is: centre (the table frame) or corner (a "
           "corner of the playing area, x along its length)");
@@ -757,6 +760,7 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   if (const auto n = absl::GetFlag(FLAGS_max_iterations)) request.set_max_iterations(*n);
   if (const auto n = absl::GetFlag(FLAGS_max_simulations)) request.set_max_simulations(*n);
   request.set_fit_elevation(absl::GetFlag(FLAGS_fit_elevation));
+  if (const auto h = absl::GetFlag(FLAGS_huber)) request.set_huber_m(*h);
   const std::string cue = absl::GetFlag(FLAGS_cue_ball);
   for (const std::string& path : args) {
     std::ifstream in(path, std::ios::binary);

@@ -215,6 +215,7 @@ absl::StatusOr<CalibrationJob> CalibrationJobFromProto(const v1::CalibrateTableR
     o.max_simulations = request.max_simulations();
   }
   o.strike_bounds.fit_elevation = request.fit_elevation();
+  o.huber_m = request.huber_m();  // checked with the rest below
   // The options against the table and shots: parameter names and bounds.
   if (absl::Status s = b::ValidateCalibration(job.spec, job.solver, job.recordings, o); !s.ok()) {
     std::string message(s.message());

@@ -1737,6 +1737,34 @@ class CalibrateAgainstServer(unittest.TestCase):
         r = cli(self.server.address, "table", "calibrate", *self.files, "--rack", "empty")
         self.assertEqual(r.returncode, 64, r.stderr)  # a usage error
 
+    def test_hubers_loss_calibrates_through_false_detections(self):
+        # Every 17th row of each file a metre off, as a tracker's false detections: under
+        # --huber 0.01 the rolling resistance comes back as from the clean files; a bad scale
+        # is refused naming the field.
+        paths = []
+        for path in self.files:
+            with open(path) as f:
+                rows = list(csv.DictReader(f))
+            for i in range(16, len(rows), 17):
+                if float(rows[i]["t_s"]) > 0:
+                    x = float(rows[i]["x_m"])
+                    rows[i]["x_m"] = repr(x - 1.0 if x > 0 else x + 1.0)
+            noisy = os.path.join(self.dir.name, "false-" + os.path.basename(path))
+            with open(noisy, "w") as f:
+                f.write("t,ball,x,y\n")
+                for row in rows:
+                    f.write("%s,%s,%s,%s\n" % (row["t_s"], row["id"], row["x_m"], row["y_m"]))
+            paths.append(noisy)
+        r = cli(self.server.address, "--format", "json", "table", "calibrate", *paths,
+                "--table", "carom", "--fit", "mu_roll", "--huber", "0.01")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertAlmostEqual(json.loads(r.stdout)["params"]["mu_roll"], 0.006,
+                               delta=0.006 * 0.01)
+        r = cli(self.server.address, "table", "calibrate", *paths, "--table", "carom",
+                "--huber", "-1")
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("huber_m must be in [0, 1] m", r.stderr)
+
     def test_a_server_with_the_default_request_limit_calibrates_uploaded_shots(self):
         # The two recordings are larger than one request may be by default (64 KiB); the CLI
         # uploads them in parts (UploadCalibration), and the report is the one a server with

@@ -7,6 +7,7 @@
 // timeout.
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <thread>
@@ -22,6 +23,7 @@
 #include "client/calibration_upload.h"
 #include "server/app/server_app.h"
 #include "server/billiards/calibration.h"
+#include "server/billiards/convert.h"
 #include "sim/billiards/calibrate.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
@@ -281,6 +283,56 @@ TEST_F(CalibrationTest, BadRequestsAreInvalidArgumentNamingTheField) {
   req = good;
   req.set_max_iterations(0);
   EXPECT_THAT(refused(req), HasSubstr("max_iterations"));
+  req = good;
+  req.set_huber_m(-0.01);
+  EXPECT_THAT(refused(req), HasSubstr("huber_m must be in [0, 1] m"));
+}
+
+// A tracker's false detections: every 17th point of each shot a metre off. Under Huber's loss
+// (1 cm) the rolling resistance comes back as from the clean tracks, each shot's fit lies
+// within a millimetre of its clean track, and the report is the offline calibration's, bit
+// for bit; by least squares the fit is pulled off.
+TEST_F(CalibrationTest, HubersLossFitsThroughFalseDetections) {
+  Start();
+  v1::CalibrateTableRequest req = Request();
+  const v1::CalibrateTableRequest clean = req;
+  for (v1::RecordedShot& shot : *req.mutable_shots()) {
+    for (int i = 16; i < shot.points_size(); i += 17) {
+      v1::TrackedPoint* p = shot.mutable_points(i);
+      p->set_x_m(p->x_m() > 0 ? p->x_m() - 1.0 : p->x_m() + 1.0);
+    }
+  }
+  req.set_huber_m(0.01);
+  std::vector<v1::CalibrateTableResponse> msgs;
+  grpc::Status st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  const v1::CalibrationReport robust = msgs.back().report();
+  EXPECT_NEAR(robust.params().at("mu_roll"), 0.006, 0.006 * 0.01);
+  ExpectTheOfflineReport(req, robust);
+  // Each shot's fitted strike against its clean track.
+  absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(clean);
+  ASSERT_TRUE(job.ok()) << job.status();
+  billiards::TableSpec spec = job->spec;
+  spec.params.mu_roll = robust.params().at("mu_roll");
+  const billiards::TableModel model = *billiards::TableModel::Create(spec);
+  for (int i = 0; i < robust.shots_size(); ++i) {
+    absl::StatusOr<billiards::CueStrike> strike = StrikeFromProto(robust.shots(i).strike_after());
+    ASSERT_TRUE(strike.ok()) << strike.status();
+    absl::StatusOr<billiards::ShotError> e =
+        billiards::ScoreShot(model, job->solver, job->recordings[static_cast<size_t>(i)], *strike,
+                             1e300, robust.shots(i).strike_time_after_s());
+    ASSERT_TRUE(e.ok()) << e.status();
+    EXPECT_LT(e->mean_m, 1e-3) << i;
+  }
+
+  req.clear_huber_m();
+  msgs.clear();
+  st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  EXPECT_GT(std::abs(msgs.back().report().params().at("mu_roll") - 0.006),
+            10 * std::abs(robust.params().at("mu_roll") - 0.006));
 }
 
 // Under the default request size limit, two recorded shots at 50 Hz are refused by gRPC.
