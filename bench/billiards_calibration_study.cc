@@ -24,6 +24,9 @@
 //    the clean track (the same noise without them), the truth a false detection hides.
 //  - --huber M: every fit under Huber's loss with scale M metres (calibrate.h), instead of
 //    squared distances.
+//  - --aimed: the synthetic strikes aimed so that the cue ball meets the first object ball
+//    first, as in most three-cushion shots (the same layouts, speeds and spins otherwise);
+//    source synthetic-aimed.
 //
 // For each model (han, mathavan2010, stronge), with the preset's constants, with its rolling resistance
 // alone fitted, and calibrated (its cloth and cushion constants fitted), each fit on the first
@@ -41,7 +44,7 @@
 //
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
-//          [--write-set FILE] [--false-detections F] [--huber M]
+//          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -83,7 +86,11 @@ TableSpec ReferenceTable() {
   return s;
 }
 
-std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections = 0.0) {
+// n random three-ball shots. Aimed: each strike's line passes within 0.9 of a ball's diameter
+// of the first object ball's centre, so that the cue ball meets it first, as in most
+// three-cushion shots; else within +-0.25 rad of its centre, and many miss it.
+std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections = 0.0,
+                                 bool aimed = false) {
   const TableModel truth = *TableModel::Create(ReferenceTable());
   const double l = truth.spec().length_m, w = truth.spec().width_m, d = 2 * truth.radius();
   std::mt19937_64 rng(seed);
@@ -103,7 +110,9 @@ std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections =
     CueStrike c;
     c.ball_speed = true;
     c.speed_mps = 2.0 + 2.5 * u(rng);
-    c.phi_rad = std::atan2(to.y(), to.x()) + (u(rng) - 0.5) * 0.5;
+    const double spread = u(rng) - 0.5;
+    c.phi_rad = std::atan2(to.y(), to.x()) +
+                (aimed ? std::asin(std::min(1.0, 1.8 * spread * d / to.head<2>().norm())) : spread * 0.5);
     c.a = 0.6 * (u(rng) - 0.5);
     c.b = 0.6 * (u(rng) - 0.5);
     // A tracker's clock: started 0.1 to 0.5 s before the strike, whose time is not known.
@@ -348,6 +357,7 @@ int main(int argc, char** argv) {
   bool synthetic = true;
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
+  bool aimed = false;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
       shots = 4;
@@ -367,6 +377,8 @@ int main(int argc, char** argv) {
       write_set = argv[++i];
     } else if (!std::strcmp(argv[i], "--recorded-shots") && i + 1 < argc) {
       recorded_shots = std::max(2, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--aimed")) {
+      aimed = true;
     } else if (!std::strcmp(argv[i], "--false-detections") && i + 1 < argc) {
       false_detections = std::atof(argv[++i]);
       if (!(false_detections >= 0.0 && false_detections <= 0.5)) {
@@ -384,7 +396,7 @@ int main(int argc, char** argv) {
                    "usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] "
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
-                   "[--false-detections F] [--huber M]\n");
+                   "[--false-detections F] [--huber M] [--aimed]\n");
       return 2;
     }
   }
@@ -394,11 +406,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (synthetic) {
+    const std::string source = aimed ? "synthetic-aimed" : "synthetic";
     if (false_detections > 0.0) {
-      Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33, false_detections),
-            Synthetic(shots, 33));
+      Study(source, *MakeTablePreset("carom"), Synthetic(shots, 33, false_detections, aimed),
+            Synthetic(shots, 33, 0.0, aimed));
     } else {
-      Study("synthetic", *MakeTablePreset("carom"), Synthetic(shots, 33));
+      Study(source, *MakeTablePreset("carom"), Synthetic(shots, 33, 0.0, aimed));
     }
   }
   if (!path.empty()) {
