@@ -180,6 +180,20 @@ std::vector<const TrackPoint*> CuePoints(const Recording& rec) {
   return out;
 }
 
+// The struck ball's departure from `spot` among its points `cue` after time `after`: the
+// departure's first point and the next (Departs). With no departure (a track that ends one
+// point into the motion, or one whose points never line up) its first point a centimetre away
+// and no next; neither when it never leaves.
+std::pair<const TrackPoint*, const TrackPoint*> Departure(const std::vector<const TrackPoint*>& cue,
+                                                          const Eigen::Vector2d& spot, double after) {
+  const TrackPoint* away = nullptr;
+  for (size_t k = 0; k < cue.size(); ++k) {
+    if (cue[k]->t_s <= after) continue;
+    if (k + 1 < cue.size() && Departs(spot, *cue[k], *cue[k + 1])) return {cue[k], cue[k + 1]};
+    if (away == nullptr && (cue[k]->xy - spot).norm() >= kStruckDistance) away = cue[k];
+  }
+  return {away, nullptr};
+}
 
 StrikeClock ClockOf(const TableModel& model, const Recording& rec) {
   StrikeClock c;
@@ -188,31 +202,15 @@ StrikeClock ClockOf(const TableModel& model, const Recording& rec) {
     return c;
   }
   const Eigen::Vector2d spot = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
-  const TrackPoint* first = nullptr;   // the first cue ball point of its departure
-  const TrackPoint* second = nullptr;  // the cue ball's point after it
-  double previous = 0.0;               // the cue ball's last point's time
   const std::vector<const TrackPoint*> cue = CuePoints(rec);
-  for (size_t k = 0; k < cue.size(); ++k) {
-    const TrackPoint& p = *cue[k];
-    const double d = (p.xy - spot).norm();
-    if (k + 1 < cue.size() && Departs(spot, p, *cue[k + 1])) {
-      first = &p;
-      second = cue[k + 1];
-      break;
-    }
-    if (d <= kOnSpot) c.lo = previous;
-    previous = p.t_s;
-  }
-  if (first == nullptr && !cue.empty()) {
-    // A track that ends a point into the motion: its first point away, if any.
-    for (const TrackPoint* p : cue) {
-      if ((p->xy - spot).norm() >= kStruckDistance) {
-        first = p;
-        break;
-      }
-    }
-  }
+  const auto [first, second] = Departure(cue, spot, -1.0);
   if (first == nullptr) return c;  // never struck: FitStrike says so
+  double previous = 0.0;  // the cue ball's last point's time
+  for (const TrackPoint* p : cue) {
+    if (p == first) break;
+    if ((p->xy - spot).norm() <= kOnSpot) c.lo = previous;
+    previous = p->t_s;
+  }
   c.hi = first->t_s;
   c.fitted = c.hi - c.lo > 1e-9;  // else it is known to be there
   c.t0 = 0.5 * (c.lo + c.hi);
@@ -295,16 +293,7 @@ struct StrikeMap {
 std::optional<std::pair<double, double>> FirstMotion(const TableModel& model, const Recording& rec,
                                                      const StrikeClock& clock) {
   const Eigen::Vector2d start = rec.initial.balls[static_cast<size_t>(rec.cue)].r.head<2>();
-  const std::vector<const TrackPoint*> cue = CuePoints(rec);
-  const TrackPoint* first = nullptr;
-  for (size_t k = 0; k < cue.size() && first == nullptr; ++k) {
-    if (cue[k]->t_s <= clock.t0) continue;
-    // The departure (ClockOf's), or for a track that ends a point into the motion its last.
-    if (k + 1 < cue.size() ? Departs(start, *cue[k], *cue[k + 1])
-                           : (cue[k]->xy - start).norm() >= kStruckDistance) {
-      first = cue[k];
-    }
-  }
+  const TrackPoint* first = Departure(CuePoints(rec), start, clock.t0).first;
   if (first == nullptr) return std::nullopt;
   const double dt = first->t_s - clock.t0;
   const Eigen::Vector2d d = first->xy - start;
@@ -512,6 +501,18 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
   }
   const std::vector<double> windows = Windows(rec, clock, until_s);
   double best_cost = std::numeric_limits<double>::infinity();
+  // Scores a strike over the whole window and keeps it where it beats the best so far.
+  auto keep = [&](const TimedStrike& timed) -> absl::Status {
+    absl::StatusOr<Scored> scored = ScoreOn(model, solver, rec, timed, all, budget);
+    if (!scored.ok()) return scored.status();
+    if (scored->loss < best_cost) {
+      best_cost = scored->loss;
+      best.strike = timed.strike;
+      best.strike_time_s = timed.time_s;
+      best.error = scored->error;
+    }
+    return absl::OkStatus();
+  };
   for (const auto& [a, b] : tips) {
     CueStrike s0;
     s0.ball_speed = true;
@@ -538,15 +539,7 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
         u.conservativeResize(fitting.size());  // the time was the last coordinate
       }
     }
-    const TimedStrike timed = fitting.ToTimed(u.data());
-    absl::StatusOr<Scored> scored = ScoreOn(model, solver, rec, timed, all, budget);
-    if (!scored.ok()) return scored.status();
-    if (scored->loss < best_cost) {
-      best_cost = scored->loss;
-      best.strike = timed.strike;
-      best.strike_time_s = timed.time_s;
-      best.error = scored->error;
-    }
+    if (absl::Status s = keep(fitting.ToTimed(u.data())); !s.ok()) return s;
   }
   StrikeMap polish = map;
   polish.clock = clock.Around(best.strike_time_s);
@@ -558,16 +551,8 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
         !s.ok()) {
       return s;
     }
-    const TimedStrike timed = polish.ToTimed(u.data());
-    absl::StatusOr<Scored> scored = ScoreOn(model, solver, rec, timed, all, budget);
-    if (!scored.ok()) return scored.status();
     // LM keeps the best point it saw: never worse but for rounding.
-    if (scored->loss < best_cost) {
-      best_cost = scored->loss;
-      best.strike = timed.strike;
-      best.strike_time_s = timed.time_s;
-      best.error = scored->error;
-    }
+    if (absl::Status s = keep(polish.ToTimed(u.data())); !s.ok()) return s;
   }
   if (loss != nullptr) *loss = best_cost;
   best.strike.phi_rad = std::remainder(best.strike.phi_rad, 2.0 * std::numbers::pi);
