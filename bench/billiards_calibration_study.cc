@@ -27,6 +27,9 @@
 //  - --aimed: the synthetic strikes aimed so that the cue ball meets the first object ball
 //    first, as in most three-cushion shots (the same layouts, speeds and spins otherwise);
 //    source synthetic-aimed.
+//  - --elevation LO:HI: the synthetic cues raised LO to HI degrees (a raised cue's side spin
+//    curves the path from the start); --fit-elevation fits the cue's elevation with every
+//    strike (else level). Raised shots' source ends in -raised.
 //
 // For each model (han, mathavan2010, stronge), with the preset's constants, with its rolling resistance
 // alone fitted, and calibrated (its cloth and cushion constants fitted), each fit on the first
@@ -45,12 +48,15 @@
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
+//          [--elevation LO:HI] [--fit-elevation]
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <sstream>
 #include <string>
@@ -67,8 +73,10 @@ namespace {
 
 constexpr double kPredictWindow = 0.4;  // s
 
-// Every fit's Huber scale (m; 0: squared distances), --huber.
+// Every fit's Huber scale (m; 0: squared distances), --huber; what a strike fit may be
+// (--fit-elevation).
 double huber_m = 0.0;
+StrikeBounds strike_bounds;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -89,12 +97,15 @@ TableSpec ReferenceTable() {
 // n random three-ball shots. Aimed: each strike's line passes within 0.9 of a ball's diameter
 // of the first object ball's centre, so that the cue ball meets it first, as in most
 // three-cushion shots; else within +-0.25 rad of its centre, and many miss it.
+// A cue elevation in [elevation_deg[0], elevation_deg[1]] degrees (drawn from its own
+// generator, so the shots are the same otherwise).
 std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections = 0.0,
-                                 bool aimed = false) {
+                                 bool aimed = false, std::array<double, 2> elevation_deg = {0, 0}) {
   const TableModel truth = *TableModel::Create(ReferenceTable());
   const double l = truth.spec().length_m, w = truth.spec().width_m, d = 2 * truth.radius();
   std::mt19937_64 rng(seed);
   std::mt19937_64 clock_rng(seed + 1);  // the trackers' clocks, apart from the shots
+  std::mt19937_64 cue_rng(seed + 2);    // the cue's elevation, apart from the rest
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Recording> out;
   while (static_cast<int>(out.size()) < n) {
@@ -115,6 +126,10 @@ std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections =
                 (aimed ? std::asin(std::min(1.0, 1.8 * spread * d / to.head<2>().norm())) : spread * 0.5);
     c.a = 0.6 * (u(rng) - 0.5);
     c.b = 0.6 * (u(rng) - 0.5);
+    if (elevation_deg[1] > 0.0) {
+      c.theta_rad = (elevation_deg[0] + (elevation_deg[1] - elevation_deg[0]) * u(cue_rng)) *
+                    std::numbers::pi / 180.0;
+    }
     // A tracker's clock: started 0.1 to 0.5 s before the strike, whose time is not known.
     const double strike_time = 0.1 + 0.4 * u(clock_rng);
     absl::StatusOr<Recording> r = SyntheticRecording(
@@ -273,9 +288,9 @@ void Score(const std::string& source, const std::string& model_name, const std::
   for (size_t i = 0; i < test.size(); ++i) {
     const Recording& rec = test[i];
     const Recording& clean = truth[i];
-    absl::StatusOr<StrikeFit> whole = FitStrike(m, SolverOptions{}, rec, StrikeBounds{}, 1e300, huber_m);
+    absl::StatusOr<StrikeFit> whole = FitStrike(m, SolverOptions{}, rec, strike_bounds, 1e300, huber_m);
     absl::StatusOr<StrikeFit> early =
-        FitStrike(m, SolverOptions{}, rec, StrikeBounds{}, kPredictWindow, huber_m);
+        FitStrike(m, SolverOptions{}, rec, strike_bounds, kPredictWindow, huber_m);
     if (!whole.ok() || !early.ok()) continue;
     absl::StatusOr<ShotError> scored =
         ScoreShot(m, SolverOptions{}, clean, whole->strike, 1e300, whole->strike_time_s);
@@ -318,6 +333,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
     CalibrationOptions roll;
     roll.params.push_back({.name = "mu_roll"});
     roll.huber_m = huber_m;
+    roll.strike_bounds = strike_bounds;
     if (absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, train, roll); r.ok()) {
       TableSpec s = spec;
       s.params = r->params;
@@ -325,6 +341,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
     }
     CalibrationOptions o;
     o.huber_m = huber_m;
+    o.strike_bounds = strike_bounds;
     for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2"}) o.params.push_back({.name = p});
     if (cm != CushionModel::kMathavan2010) {
       o.params.push_back({.name = "e_cushion"});
@@ -358,6 +375,7 @@ int main(int argc, char** argv) {
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
   bool aimed = false;
+  std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
       shots = 4;
@@ -379,6 +397,14 @@ int main(int argc, char** argv) {
       recorded_shots = std::max(2, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--aimed")) {
       aimed = true;
+    } else if (!std::strcmp(argv[i], "--fit-elevation")) {
+      strike_bounds.fit_elevation = true;
+    } else if (!std::strcmp(argv[i], "--elevation") && i + 1 < argc) {
+      if (std::sscanf(argv[++i], "%lf:%lf", &elevation[0], &elevation[1]) != 2 ||
+          !(elevation[0] >= 0.0 && elevation[1] >= elevation[0] && elevation[1] <= 30.0)) {
+        std::fprintf(stderr, "--elevation: LO:HI degrees, 0 <= LO <= HI <= 30\n");
+        return 2;
+      }
     } else if (!std::strcmp(argv[i], "--false-detections") && i + 1 < argc) {
       false_detections = std::atof(argv[++i]);
       if (!(false_detections >= 0.0 && false_detections <= 0.5)) {
@@ -396,7 +422,8 @@ int main(int argc, char** argv) {
                    "usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] "
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
-                   "[--false-detections F] [--huber M] [--aimed]\n");
+                   "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
+                   "[--fit-elevation]\n");
       return 2;
     }
   }
@@ -406,12 +433,14 @@ int main(int argc, char** argv) {
     return 1;
   }
   if (synthetic) {
-    const std::string source = aimed ? "synthetic-aimed" : "synthetic";
+    const std::string source = std::string("synthetic") + (aimed ? "-aimed" : "") +
+                               (elevation[1] > 0.0 ? "-raised" : "");
     if (false_detections > 0.0) {
-      Study(source, *MakeTablePreset("carom"), Synthetic(shots, 33, false_detections, aimed),
-            Synthetic(shots, 33, 0.0, aimed));
+      Study(source, *MakeTablePreset("carom"),
+            Synthetic(shots, 33, false_detections, aimed, elevation),
+            Synthetic(shots, 33, 0.0, aimed, elevation));
     } else {
-      Study(source, *MakeTablePreset("carom"), Synthetic(shots, 33, 0.0, aimed));
+      Study(source, *MakeTablePreset("carom"), Synthetic(shots, 33, 0.0, aimed, elevation));
     }
   }
   if (!path.empty()) {
