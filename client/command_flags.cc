@@ -266,7 +266,8 @@ std::vector<CommandSpec> MakeSpecs() {
               {"window", "held-out shots' strikes from their first seconds only, (0, 3600] s"},
               {"max_iterations", "Levenberg-Marquardt iterations, [1, 1000] (default 60)"},
               {"max_simulations", "simulations in all, [1, 1e9] (default 2000000)"},
-              {"cue_ball", "the struck ball in every file (default: the first to move a cm)"},
+              {"cue_ball", "the struck ball in every file (default: the first to depart from "
+                           "its spot)"},
               {"fit_elevation", "fit the cue's elevation too (default level)"},
               {"huber", "Huber's scale in metres, [0, 1]: false detections pull the fit as "
                         "hard as a point this far (default: squared distances)"},

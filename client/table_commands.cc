@@ -82,7 +82,8 @@ ABSL_FLAG(std::optional<int>, max_iterations, std::nullopt,
 ABSL_FLAG(std::optional<int64_t>, max_simulations, std::nullopt,
           "table calibrate: simulations in all, [1, 1e9] (default 2000000)");
 ABSL_FLAG(std::string, cue_ball, "",
-          "table calibrate: the struck ball in every file (default: the first ball to move)");
+          "table calibrate: the struck ball in every file (default: the first ball to depart "
+          "from its spot)");
 ABSL_FLAG(bool, fit_elevation, false, "table calibrate: fit the cue's elevation too");
 ABSL_FLAG(std::optional<double>, huber, std::nullopt,
           "table calibrate: Huber's scale in metres, [0, 1], for trackers' false detections "
