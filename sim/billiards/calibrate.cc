@@ -142,12 +142,12 @@ class Budget {
 
 // When a recording's strike happened on its track's clock: known, or fitted within
 // [lo, hi] from t0. The bounds and the start are read from the cue ball's track alone (no
-// model): the strike comes before the first point a centimetre away from the spot (and
-// followed by another away: a single point away between points on the spot is a tracker's
-// false detection, not the strike), and after
-// the point before the last one still on the spot (not the last itself: a ball struck just
-// before it is still within the tracker's noise of its spot there), and the first two points
-// away from it, extrapolated back to the spot at their speed, say when.
+// model): the strike comes before the cue ball's departure from its spot (Departure: a point a
+// centimetre away and the next farther along the same line; a single point away is a
+// tracker's false detection, not the strike), and after the point before the last one still
+// on the spot (not the last itself: a ball struck just before it is still within the
+// tracker's noise of its spot there); the departure's two points, extrapolated back to the
+// spot at their speed, say when.
 struct StrikeClock {
   bool fitted = false;
   double lo = 0.0, hi = 0.0, t0 = 0.0;

@@ -406,8 +406,6 @@ TEST_F(CalibrationTest, BadUploadsAreInvalidArgumentNamingTheMessage) {
   EXPECT_THAT(refused(bad), HasSubstr("shots[0].cue_ball"));
 }
 
-// The uploads in progress share --max_upload_bytes: one that would pass it is refused, and
-// what a call held is given back when it ends.
 // An upload whose client sends a few parts and then nothing is ended after
 // --stream_stall_timeout, with the flag named, and gives its bytes back; an upload that sends
 // slowly but steadily, each part within the timeout, goes through, however long it takes in
@@ -456,6 +454,8 @@ TEST_F(CalibrationTest, AnUploadThatStallsIsEndedAndGivesItsBytesBack) {
   EXPECT_TRUE(msgs.back().has_report());
 }
 
+// The uploads in progress share --max_upload_bytes: one that would pass it is refused, and
+// what a call held is given back when it ends.
 TEST_F(CalibrationTest, UploadsShareTheServersBudget) {
   config_.streams.upload_bytes = 96 << 10;  // less than the two shots' 130 kB
   Start();
