@@ -9,6 +9,7 @@
 #include <random>
 #include <utility>
 
+#include "Eigen/LU"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "unsupported/Eigen/LevenbergMarquardt"
@@ -777,6 +778,36 @@ absl::Status ValidateCalibration(const TableSpec& spec, const SolverOptions& sol
   return Prepare(spec, solver, recordings, options).status();
 }
 
+// The fitted parameters' covariance in their unbounded coordinates, linearised at the fit:
+// the sandwich (J'J)^-1 J'DJ (J'J)^-1 of the reduced Jacobian J (each training shot's rows with
+// what its own strike can take up projected out). D is the residuals' variance: a shot's rows
+// carry its weight w (every shot weighs the same, whatever its points), and each coordinate of
+// a point the noise variance s^2, estimated from the unweighted residuals over the degrees of
+// freedom left (`dof`: the parameters and the strikes' coordinates). nullopt where J'J is
+// singular: the shots do not tell some parameter from the others.
+std::optional<Eigen::MatrixXd> Covariance(const Eigen::MatrixXd& j, const VectorXd& r,
+                                          std::span<const int> train, std::span<const int> row0,
+                                          std::span<const ShotPoints> pts, int dof) {
+  const int kp = static_cast<int>(j.cols());
+  double squares = 0.0;
+  Eigen::MatrixXd b = Eigen::MatrixXd::Zero(kp, kp);
+  for (int i : train) {
+    const ShotPoints& sp = pts[static_cast<size_t>(i)];
+    const int first = row0[static_cast<size_t>(i)], n = 2 * sp.n;
+    if (n == 0) continue;
+    const double w2 = sp.weight * sp.weight;
+    squares += r.segment(first, n).squaredNorm() / w2;
+    const auto block = j.middleRows(first, n);
+    b += w2 * (block.transpose() * block);
+  }
+  const int left = static_cast<int>(r.size()) - dof;
+  if (left <= 0) return std::nullopt;
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(j.transpose() * j);
+  if (!lu.isInvertible()) return std::nullopt;
+  const Eigen::MatrixXd a_inv = lu.inverse();
+  return Eigen::MatrixXd(a_inv * (squares / left * b) * a_inv);
+}
+
 absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverOptions& solver,
                                             std::span<const Recording> recordings,
                                             const CalibrationOptions& options) {
@@ -870,6 +901,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   // every step of all the others), and alternating the two crawls along their coupling (a
   // livelier cushion and a slower strike trade against each other).
   PhysicsParams fitted_params = spec.params;
+  std::vector<double> standard_errors(static_cast<size_t>(kp), 0.0);
   auto model_at = [&](const VectorXd& u) -> absl::StatusOr<TableModel> {
     TableSpec ts = spec;
     for (int c = 0; c < kp; ++c) {
@@ -969,45 +1001,90 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     // Passes: LM on the parameters; then every strike fitted afresh (FitStrike's starts and
     // windows) under the parameters reached, kept where it beats the one carried along (a
     // strike fitted under the starting parameters can sit in another basin, a ball hit on the
-    // other side, and pull the parameters its way); again while a strike changed.
+    // other side, and pull the parameters its way); again while a strike changed. Returns the
+    // iterations used, up to `most`; r is left the residuals at x.
     VectorXd r(rows);
+    auto run_passes = [&](int most, double progress_from, double progress_to) -> absl::StatusOr<int> {
+      int used = 0;
+      for (int pass = 0; pass < kPasses && used < most; ++pass) {
+        absl::StatusOr<int> it = Minimize(f, &x, most - used);
+        if (!it.ok()) return it.status();
+        used += std::max(*it, 1);
+        // The strikes as fitted to the parameters reached (the last evaluation may have been
+        // a rejected trial's).
+        anchor = strikes;
+        if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
+        anchor = strikes;
+        absl::StatusOr<TableModel> m = model_at(x);
+        if (!m.ok()) return m.status();
+        bool changed = false;
+        for (int i : train) {
+          const Recording& rec = recordings[static_cast<size_t>(i)];
+          if (rec.strike) continue;
+          const ShotPoints& sp = pts[static_cast<size_t>(i)];
+          const double now = r.segment(row0[static_cast<size_t>(i)], 2 * sp.n).squaredNorm();
+          double loss = 0.0;
+          absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300,
+                                                        options.huber_m, &budget,
+                                                        /*free_time=*/false, &loss);
+          if (!fresh.ok()) return fresh.status();
+          if (loss < (1.0 - 1e-3) * now) {
+            strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
+            changed = true;
+          }
+        }
+        progress(progress_from + (progress_to - progress_from) * (pass + 1) / kPasses, "fit");
+        if (!changed) break;
+        if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
+        f.last_x.resize(0);  // the strikes moved: no cached evaluation holds
+      }
+      return used;
+    };
     // The held passes' share of the iterations; the rest (at least one of two or more) frees
     // the times.
     const int held_iterations =
         any_clock ? std::max(1, options.max_iterations * 3 / 4) : options.max_iterations;
-    for (int pass = 0; pass < kPasses && report.iterations < held_iterations; ++pass) {
-      absl::StatusOr<int> it = Minimize(f, &x, held_iterations - report.iterations);
-      if (!it.ok()) return it.status();
-      report.iterations += std::max(*it, 1);
-      // The strikes as fitted to the parameters reached (the last evaluation may have been a
-      // rejected trial's).
-      anchor = strikes;
-      if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
-      anchor = strikes;
+    absl::StatusOr<int> held_used = run_passes(held_iterations, 0.3, 0.6);
+    if (!held_used.ok()) return held_used.status();
+    // A restart: every strike fitted afresh under the parameters reached and taken whatever it
+    // scores there, then the passes again; kept if they end lower. A strike carried along the
+    // fit's path can settle in a basin of its own that scores better than a fresh fit at the
+    // parameters reached but holds them in a false valley: five constants fitted to eight
+    // synthetic shots from the carom preset stopped with the spin-down at 6.17 for 7.5, the
+    // loss 66 % above the one at the truth, where a fit started at the truth stays; fresh
+    // strikes see a smooth valley to the truth. One parameter's fits end at the noise without
+    // it (the study's and the tests'), so they are spared its cost.
+    if (kp >= 2) {
+      const VectorXd x_kept = x;
+      const std::vector<TimedStrike> strikes_kept = strikes;
+      if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
+      const double loss_kept = r.squaredNorm();
       absl::StatusOr<TableModel> m = model_at(x);
       if (!m.ok()) return m.status();
-      bool changed = false;
       for (int i : train) {
         const Recording& rec = recordings[static_cast<size_t>(i)];
         if (rec.strike) continue;
-        const ShotPoints& sp = pts[static_cast<size_t>(i)];
-        const double now = r.segment(row0[static_cast<size_t>(i)], 2 * sp.n).squaredNorm();
-        double loss = 0.0;
         absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300,
                                                       options.huber_m, &budget,
-                                                      /*free_time=*/false, &loss);
+                                                      /*free_time=*/false);
         if (!fresh.ok()) return fresh.status();
-        if (loss < (1.0 - 1e-3) * now) {
-          strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
-          changed = true;
-        }
+        strikes[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
       }
-      progress(0.3 + 0.6 * (pass + 1) / kPasses, "fit");
-      if (!changed) break;
+      anchor = strikes;
+      f.last_x.resize(0);
+      absl::StatusOr<int> restart_used = run_passes(held_iterations, 0.6, 0.9);
+      if (!restart_used.ok()) return restart_used.status();
+      report.iterations += *restart_used;
       if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
-      f.last_x.resize(0);  // the strikes moved: no cached evaluation holds
+      if (!(r.squaredNorm() < loss_kept)) {
+        x = x_kept;
+        strikes = anchor = strikes_kept;
+        if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
+      }
+      f.last_x.resize(0);
     }
-    if (any_clock && report.iterations < options.max_iterations) {
+    report.iterations += *held_used;
+    if (any_clock && *held_used < options.max_iterations) {
       // The times freed, each around where it was held.
       free_time = true;
       for (int i : train) {
@@ -1015,15 +1092,31 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
             clocks[static_cast<size_t>(i)].Around(strikes[static_cast<size_t>(i)].time_s);
       }
       f.last_x.resize(0);
-      absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - report.iterations);
+      absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - *held_used);
       if (!it.ok()) return it.status();
       report.iterations += std::max(*it, 1);
       anchor = strikes;
       if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
     }
+    // The parameters' standard errors at the fit: the reduced Jacobian there, the strikes
+    // where the fit left them.
+    if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
+    Eigen::MatrixXd jr(rows, kp);
+    if (absl::Status st = f.jacobian(x, r, &jr); !st.ok()) return st;
+    int dof = kp;
+    for (int i : train) {
+      if (!recordings[static_cast<size_t>(i)].strike) dof += map_of(i).size();
+    }
+    const std::optional<Eigen::MatrixXd> cov = Covariance(jr, r, train, row0, pts, dof);
     for (int c = 0; c < kp; ++c) {
       const Fitted& fp = fitted[static_cast<size_t>(c)];
-      fitted_params.*(fp.info->field) = FromU(x[c], fp.lo, fp.hi);
+      const double p = FromU(x[c], fp.lo, fp.hi);
+      fitted_params.*(fp.info->field) = p;
+      // dp/du of the logistic map onto [lo, hi].
+      const double slope = (p - fp.lo) * (fp.hi - p) / (fp.hi - fp.lo);
+      standard_errors[static_cast<size_t>(c)] =
+          cov ? slope * std::sqrt(std::max(0.0, (*cov)(c, c)))
+              : std::numeric_limits<double>::infinity();
     }
   }
   TableSpec fitted_spec = spec;
@@ -1056,9 +1149,16 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     progress(0.9 + 0.1 * (i + 1) / shots, "report");
   }
   report.params = fitted_params;
-  for (const Fitted& f : fitted) {
-    report.fitted.push_back({std::string(f.info->name), spec.params.*(f.info->field),
-                             fitted_params.*(f.info->field), f.lo, f.hi});
+  for (size_t c = 0; c < fitted.size(); ++c) {
+    const Fitted& f = fitted[c];
+    const double after = fitted_params.*(f.info->field);
+    report.fitted.push_back({.name = std::string(f.info->name),
+                             .before = spec.params.*(f.info->field),
+                             .after = after,
+                             .lo = f.lo,
+                             .hi = f.hi,
+                             .standard_error = standard_errors[c],
+                             .at_bound = std::min(after - f.lo, f.hi - after) < 1e-3 * (f.hi - f.lo)});
   }
   report.train_before_m = Median(train_before);
   report.train_after_m = Median(train_after);

@@ -186,6 +186,16 @@ struct ShotReport {
 struct ParamReport {
   std::string name;
   double before = 0.0, after = 0.0, lo = 0.0, hi = 0.0;
+  /// The fitted value's standard error, linearised at the fit with every strike profiled out
+  /// (variable projection) and the tracker's noise taken as independent between points, at
+  /// the scale of the fit's residuals: what the shots determine the parameter to. Correlated
+  /// errors (a model that is wrong the same way along a shot) make the true spread larger.
+  /// Infinity where the shots cannot tell the parameter from the others (a singular normal
+  /// matrix); 0 where nothing was fitted.
+  double standard_error = 0.0;
+  /// The fit ended within a thousandth of its range of a bound: the best value may lie
+  /// beyond it, and the standard error (of the bounded coordinate) says little.
+  bool at_bound = false;
 };
 
 struct CalibrationReport {

@@ -9,6 +9,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -342,7 +343,9 @@ TEST(CalibrateTest, HubersLossCalibratesThroughFalseDetections) {
       absl::StatusOr<ShotError> given = ScoreShot(m, SolverOptions{}, recs[i], r.shots[i].strike_after,
                                                   1e300, r.shots[i].strike_time_after_s);
       EXPECT_TRUE(given.ok());
-      if (given.ok()) EXPECT_EQ(given->mean_m, r.shots[i].after.mean_m) << i;
+      if (given.ok()) {
+        EXPECT_EQ(given->mean_m, r.shots[i].after.mean_m) << i;
+      }
     }
     std::sort(out.begin(), out.end());
     return out;
@@ -371,13 +374,34 @@ TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
   ASSERT_TRUE(r.ok()) << r.status();
   EXPECT_NEAR(r->params.mu_slide, want.params.mu_slide, 0.05 * want.params.mu_slide);
   EXPECT_NEAR(r->params.mu_roll, want.params.mu_roll, 0.05 * want.params.mu_roll);
-  // The spin-down is the least identified: it slows only the side spin, which changes these
-  // shots' cushion rebounds by a few percent over a shot, so fits within the noise span a
-  // quarter of its value: the same fit lands within 10 % on one CPU and at 6.2 on another,
-  // whose libm rounds some last bits otherwise.
-  EXPECT_NEAR(r->params.spin_decel_rps2, want.params.spin_decel_rps2, 0.25 * want.params.spin_decel_rps2);
+  // The spin-down too (without the fit's restart it stopped at 6.17, in a false valley its
+  // carried strikes held it in).
+  EXPECT_NEAR(r->params.spin_decel_rps2, want.params.spin_decel_rps2, 0.05 * want.params.spin_decel_rps2);
   EXPECT_NEAR(r->params.e_cushion, want.params.e_cushion, 0.02);
   EXPECT_NEAR(r->params.f_cushion, want.params.f_cushion, 0.02);
+  // The standard errors say how well the shots determine each constant: every fitted one lies
+  // within four of them of the truth, and the spin-down is, relative to its value, the least
+  // determined of the five.
+  const std::vector<std::pair<std::string, double>> truths = {
+      {"mu_slide", want.params.mu_slide}, {"mu_roll", want.params.mu_roll},
+      {"spin_decel_rps2", want.params.spin_decel_rps2}, {"e_cushion", want.params.e_cushion},
+      {"f_cushion", want.params.f_cushion}};
+  ASSERT_EQ(r->fitted.size(), truths.size());
+  double spin_relative = 0.0, others_relative = 0.0;
+  for (size_t c = 0; c < truths.size(); ++c) {
+    const ParamReport& p = r->fitted[c];
+    ASSERT_EQ(p.name, truths[c].first);
+    EXPECT_FALSE(p.at_bound) << p.name;
+    EXPECT_GT(p.standard_error, 0.0) << p.name;
+    EXPECT_LT(std::abs(p.after - truths[c].second), 4 * p.standard_error) << p.name;
+    const double relative = p.standard_error / p.after;
+    if (p.name == "spin_decel_rps2") {
+      spin_relative = relative;
+    } else {
+      others_relative = std::max(others_relative, relative);
+    }
+  }
+  EXPECT_GT(spin_relative, others_relative);
   EXPECT_LT(r->heldout_after_m, 2e-3);
   EXPECT_GT(r->heldout_before_m, 5 * r->heldout_after_m);
   EXPECT_LT(r->train_after_m, 2e-3);
