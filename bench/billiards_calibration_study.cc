@@ -357,8 +357,9 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
       continue;
     }
     for (const ParamReport& p : r->fitted) {
-      std::fprintf(stderr, "%s %s: %s %g -> %g\n", source.c_str(), name.c_str(), p.name.c_str(),
-                   p.before, p.after);
+      std::fprintf(stderr, "%s %s: %s %g -> %g (standard error %.2g%s)\n", source.c_str(),
+                   name.c_str(), p.name.c_str(), p.before, p.after, p.standard_error,
+                   p.at_bound ? ", at a bound" : "");
     }
     spec.params = r->params;
     Score(source, name, "calibrated", spec, test, truth);

@@ -1,4 +1,5 @@
 // `sportsim table ...`: authoritative tables (Billiards/CreateTable ... WatchTable).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -851,10 +852,15 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   if (!have_report) return ReportRpcError(grpc::Status(grpc::StatusCode::INTERNAL, "no report"));
   const v1::CalibrationReport& rep = last.report();
   return Print(ctx, rep, [&] {
-    std::cout << absl::StrFormat("%-22s %12s %12s   bounds\n", "parameter", "before", "after");
+    std::cout << absl::StrFormat("%-22s %12s %12s %12s   bounds\n", "parameter", "before", "after",
+                                 "std error");
     for (const v1::FittedParameter& p : rep.fitted()) {
-      std::cout << absl::StrFormat("%-22s %12.6g %12.6g   [%g, %g]\n", p.name(), p.before(), p.after(),
-                                   p.lo(), p.hi());
+      const std::string error = std::isfinite(p.standard_error())
+                                    ? absl::StrFormat("%.2g", p.standard_error())
+                                    : std::string("unidentified");
+      std::cout << absl::StrFormat("%-22s %12.6g %12.6g %12s   [%g, %g]%s\n", p.name(), p.before(),
+                                   p.after(), error, p.lo(), p.hi(),
+                                   p.at_bound() ? "  at a bound" : "");
     }
     std::cout << absl::StrFormat("%-22s %9s %9s %9s  %s\n", "shot", "before", "after", "strike s",
                                  "(mean distance, mm; strike time on the file's clock)");

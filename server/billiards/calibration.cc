@@ -235,6 +235,8 @@ void CalibrationReportToProto(const CalibrationJob& job, const b::CalibrationRep
     f->set_after(p.after);
     f->set_lo(p.lo);
     f->set_hi(p.hi);
+    f->set_standard_error(p.standard_error);
+    f->set_at_bound(p.at_bound);
   }
   for (size_t i = 0; i < report.shots.size(); ++i) {
     const b::ShotReport& s = report.shots[i];

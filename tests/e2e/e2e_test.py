@@ -1585,6 +1585,9 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertAlmostEqual(report["params"]["mu_roll"], 0.006, delta=0.006 * 0.01)
         self.assertEqual([p["name"] for p in report["fitted"]], ["mu_roll"])
         self.assertEqual(report["fitted"][0]["before"], 0.01)
+        # Exact tracks determine it to within rounding; it did not end at a bound.
+        self.assertLess(report["fitted"][0]["standard_error"], 1e-6)
+        self.assertIs(report["fitted"][0]["at_bound"], False)
         self.assertEqual([s["name"] for s in report["shots"]], ["a.csv", "b.csv"])
         for shot in report["shots"]:
             self.assertGreater(shot["before"]["mean_m"], 0.01)
@@ -1721,6 +1724,7 @@ class CalibrateAgainstServer(unittest.TestCase):
                 "--fit", "mu_roll=0.002:0.015", "--heldout", "1")
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertIn("held out", r.stdout)
+        self.assertRegex(r.stdout, r"parameter +before +after +std error +bounds")
         self.assertRegex(r.stdout, r"use: --param mu_roll=0\.00\d+")
 
     def test_bad_files_and_limits(self):

@@ -135,6 +135,9 @@ class CalibrationTest : public ::testing::Test {
         billiards::Calibrate(job->spec, job->solver, job->recordings, job->options);
     ASSERT_TRUE(offline.ok()) << offline.status();
     EXPECT_EQ(offline->params.mu_roll, rep.params().at("mu_roll"));
+    ASSERT_EQ(rep.fitted_size(), 1);
+    EXPECT_EQ(offline->fitted[0].standard_error, rep.fitted(0).standard_error());
+    EXPECT_EQ(offline->fitted[0].at_bound, rep.fitted(0).at_bound());
     EXPECT_EQ(offline->simulations, rep.simulations());
     EXPECT_EQ(offline->shots[1].after.mean_m, rep.shots(1).after().mean_m());
   }
