@@ -413,6 +413,27 @@ TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
 }
 
+// A parameter no shot moves (air drag's coefficient, with drag off) has an infinite standard
+// error; the rolling resistance fitted with it keeps its finite one, the truth within four of
+// it.
+TEST(CalibrateTest, AParameterNoShotMovesIsUnidentified) {
+  const TableSpec want = TrueTable();
+  const TableModel truth = *TableModel::Create(want);
+  const std::vector<Recording> recs = Recordings(truth, 2, 1e-3, 31);
+  TableSpec start = want;
+  start.params.mu_roll = Carom().params.mu_roll;
+  CalibrationOptions o;
+  o.params = {{.name = "mu_roll"}, {.name = "drag_coefficient"}};
+  absl::StatusOr<CalibrationReport> r = Calibrate(start, SolverOptions{}, recs, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_EQ(r->fitted.size(), 2u);
+  const ParamReport& roll = r->fitted[0];
+  EXPECT_TRUE(std::isfinite(roll.standard_error));
+  EXPECT_GT(roll.standard_error, 0.0);
+  EXPECT_LT(std::abs(roll.after - want.params.mu_roll), 4 * roll.standard_error);
+  EXPECT_TRUE(std::isinf(r->fitted[1].standard_error));
+}
+
 // Two shots, one parameter: cheap enough to run twice.
 CalibrationOptions SmallOptions() {
   CalibrationOptions o;
