@@ -855,12 +855,12 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
     std::cout << absl::StrFormat("%-22s %12s %12s %12s   bounds\n", "parameter", "before", "after",
                                  "std error");
     for (const v1::FittedParameter& p : rep.fitted()) {
-      const std::string error = std::isfinite(p.standard_error())
-                                    ? absl::StrFormat("%.2g", p.standard_error())
-                                    : std::string("unidentified");
-      std::cout << absl::StrFormat("%-22s %12.6g %12.6g %12s   [%g, %g]%s\n", p.name(), p.before(),
-                                   p.after(), error, p.lo(), p.hi(),
-                                   p.at_bound() ? "  at a bound" : "");
+      // At a bound the error, of the bounded coordinate, says nothing: the bound is the news.
+      const std::string error = p.at_bound()                     ? std::string("at a bound")
+                                : std::isfinite(p.standard_error()) ? absl::StrFormat("%.2g", p.standard_error())
+                                                                    : std::string("unidentified");
+      std::cout << absl::StrFormat("%-22s %12.6g %12.6g %12s   [%g, %g]\n", p.name(), p.before(),
+                                   p.after(), error, p.lo(), p.hi());
     }
     std::cout << absl::StrFormat("%-22s %9s %9s %9s  %s\n", "shot", "before", "after", "strike s",
                                  "(mean distance, mm; strike time on the file's clock)");

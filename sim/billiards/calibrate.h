@@ -190,8 +190,9 @@ struct ParamReport {
   /// (variable projection) and the tracker's noise taken as independent between points, at
   /// the scale of the fit's residuals: what the shots determine the parameter to. Correlated
   /// errors (a model that is wrong the same way along a shot) make the true spread larger.
-  /// Infinity where the shots cannot tell the parameter from the others (a singular normal
-  /// matrix); 0 where nothing was fitted.
+  /// Infinity where the shots cannot tell the parameter from the others (a part of it in the
+  /// normal matrix's null space: no shot moves it, or it trades exactly against others, or
+  /// it sits at a bound, where its coordinate no longer moves); 0 where nothing was fitted.
   double standard_error = 0.0;
   /// The fit ended within a thousandth of its range of a bound: the best value may lie
   /// beyond it, and the standard error (of the bounded coordinate) says little.

@@ -1727,6 +1727,20 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertRegex(r.stdout, r"parameter +before +after +std error +bounds")
         self.assertRegex(r.stdout, r"use: --param mu_roll=0\.00\d+")
 
+    def test_a_constant_no_shot_moves_is_unidentified(self):
+        # Air drag's coefficient, with drag off, moves no ball: its standard error is infinite
+        # ("unidentified"; JSON's "Infinity"), and the rolling resistance's stays finite.
+        args = ("--timeout", "5m", "table", "calibrate", *self.files, "--table", "carom",
+                "--fit", "mu_roll,drag_coefficient")
+        r = cli(self.server.address, *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"drag_coefficient +\S+ +\S+ +unidentified")
+        r = cli(self.server.address, "--format", "json", *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        fitted = {p["name"]: p for p in json.loads(r.stdout)["fitted"]}
+        self.assertEqual(fitted["drag_coefficient"]["standard_error"], "Infinity")
+        self.assertIsInstance(fitted["mu_roll"]["standard_error"], float)
+
     def test_bad_files_and_limits(self):
         bad = os.path.join(self.dir.name, "bad.csv")
         with open(bad, "w") as f:
