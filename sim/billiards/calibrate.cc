@@ -1025,6 +1025,16 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     // other side, and pull the parameters its way); again while a strike changed. Returns the
     // iterations used, up to `most`; r is left the residuals at x.
     VectorXd r(rows);
+    // Shot i's strike fitted afresh under m (FitStrike's starts and windows), its time held;
+    // `loss`, if given, gets the fit's loss.
+    auto fresh_strike = [&](const TableModel& m, int i,
+                            double* loss) -> absl::StatusOr<TimedStrike> {
+      absl::StatusOr<StrikeFit> fit =
+          FitStrikeOn(m, solver, recordings[static_cast<size_t>(i)], options.strike_bounds, 1e300,
+                      options.huber_m, &budget, /*free_time=*/false, loss);
+      if (!fit.ok()) return fit.status();
+      return TimedStrike{fit->strike, fit->strike_time_s};
+    };
     auto run_passes = [&](int most, double progress_from, double progress_to) -> absl::StatusOr<int> {
       int used = 0;
       for (int pass = 0; pass < kPasses && used < most; ++pass) {
@@ -1045,12 +1055,10 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
           const ShotPoints& sp = pts[static_cast<size_t>(i)];
           const double now = r.segment(row0[static_cast<size_t>(i)], 2 * sp.n).squaredNorm();
           double loss = 0.0;
-          absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300,
-                                                        options.huber_m, &budget,
-                                                        /*free_time=*/false, &loss);
+          absl::StatusOr<TimedStrike> fresh = fresh_strike(*m, i, &loss);
           if (!fresh.ok()) return fresh.status();
           if (loss < (1.0 - 1e-3) * now) {
-            strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
+            strikes[static_cast<size_t>(i)] = anchor[static_cast<size_t>(i)] = *fresh;
             changed = true;
           }
         }
@@ -1086,11 +1094,9 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       for (int i : train) {
         const Recording& rec = recordings[static_cast<size_t>(i)];
         if (rec.strike) continue;
-        absl::StatusOr<StrikeFit> fresh = FitStrikeOn(*m, solver, rec, options.strike_bounds, 1e300,
-                                                      options.huber_m, &budget,
-                                                      /*free_time=*/false);
+        absl::StatusOr<TimedStrike> fresh = fresh_strike(*m, i, nullptr);
         if (!fresh.ok()) return fresh.status();
-        strikes[static_cast<size_t>(i)] = {fresh->strike, fresh->strike_time_s};
+        strikes[static_cast<size_t>(i)] = *fresh;
       }
       anchor = strikes;
       f.last_x.resize(0);
