@@ -1741,6 +1741,17 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertEqual(fitted["drag_coefficient"]["standard_error"], "Infinity")
         self.assertIsInstance(fitted["mu_roll"]["standard_error"], float)
 
+    def test_a_fit_stopped_by_its_bound_says_so(self):
+        # The tracks' rolling resistance is 0.006; bounded to 0.008-0.015 the fit ends at 0.008.
+        args = ("table", "calibrate", *self.files, "--table", "carom", "--fit",
+                "mu_roll=0.008:0.015")
+        r = cli(self.server.address, *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"mu_roll +0\.01 +0\.008\d* +at a bound")
+        r = cli(self.server.address, "--format", "json", *args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIs(json.loads(r.stdout)["fitted"][0]["at_bound"], True)
+
     def test_bad_files_and_limits(self):
         bad = os.path.join(self.dir.name, "bad.csv")
         with open(bad, "w") as f:
