@@ -122,8 +122,10 @@ std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections =
     c.ball_speed = true;
     c.speed_mps = 2.0 + 2.5 * u(rng);
     const double spread = u(rng) - 0.5;
+    // Aimed: the line misses the ball's centre by up to 0.9 d, and the balls stand over 4 d
+    // apart, so the sine is within +-0.23.
     c.phi_rad = std::atan2(to.y(), to.x()) +
-                (aimed ? std::asin(std::min(1.0, 1.8 * spread * d / to.head<2>().norm())) : spread * 0.5);
+                (aimed ? std::asin(1.8 * spread * d / to.head<2>().norm()) : spread * 0.5);
     c.a = 0.6 * (u(rng) - 0.5);
     c.b = 0.6 * (u(rng) - 0.5);
     if (elevation_deg[1] > 0.0) {
