@@ -48,7 +48,11 @@
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
-//          [--elevation LO:HI] [--fit-elevation]
+//          [--elevation LO:HI] [--fit-elevation] [--strike-recovery]
+//
+// --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
+// strikes under the reference table itself (StrikeRecovery; --shots, --aimed, --huber and
+// --fit-elevation apply).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -99,8 +103,13 @@ TableSpec ReferenceTable() {
 // three-cushion shots; else within +-0.25 rad of its centre, and many miss it.
 // A cue elevation in [elevation_deg[0], elevation_deg[1]] degrees (drawn from its own
 // generator, so the shots are the same otherwise).
+struct Truth {
+  CueStrike strike;
+  double time_s = 0.0;
+};
 std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections = 0.0,
-                                 bool aimed = false, std::array<double, 2> elevation_deg = {0, 0}) {
+                                 bool aimed = false, std::array<double, 2> elevation_deg = {0, 0},
+                                 std::vector<Truth>* truths = nullptr) {
   const TableModel truth = *TableModel::Create(ReferenceTable());
   const double l = truth.spec().length_m, w = truth.spec().width_m, d = 2 * truth.radius();
   std::mt19937_64 rng(seed);
@@ -144,6 +153,7 @@ std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections =
                          .false_detections = false_detections});
     if (!r.ok()) continue;
     r->name = "synthetic" + std::to_string(out.size());
+    if (truths != nullptr) truths->push_back({c, strike_time});
     out.push_back(*std::move(r));
   }
   return out;
@@ -368,6 +378,37 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
   }
 }
 
+// How well FitStrike finds the strikes of the synthetic recordings under the reference table
+// itself (no model error): for each shot, the mean distance of the true strike's shot from
+// the track (the noise) and of the fitted strike's, and the fit's simulations. CSV on stdout;
+// on stderr, the shots whose fit is more than 5 % above the truth's error.
+void StrikeRecovery(int n, bool aimed) {
+  std::vector<Truth> truths;
+  const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed, {0, 0}, &truths);
+  const TableModel m = *TableModel::Create(ReferenceTable());
+  std::printf("shot,true_mm,fit_mm,simulations\n");
+  int misses = 0, scored = 0;
+  std::vector<double> sims;
+  for (size_t i = 0; i < recs.size(); ++i) {
+    const Truth& t = truths[i];
+    absl::StatusOr<ShotError> truth = ScoreShot(m, SolverOptions{}, recs[i], t.strike, 1e300, t.time_s);
+    absl::StatusOr<StrikeFit> f = FitStrike(m, SolverOptions{}, recs[i], strike_bounds, 1e300, huber_m);
+    if (!truth.ok() || !f.ok()) {
+      std::fprintf(stderr, "%s: %s\n", recs[i].name.c_str(),
+                   (truth.ok() ? f.status() : truth.status()).ToString().c_str());
+      continue;
+    }
+    ++scored;
+    misses += f->error.mean_m > 1.05 * truth->mean_m;
+    sims.push_back(static_cast<double>(f->simulations));
+    std::printf("%zu,%.2f,%.2f,%lld\n", i, 1e3 * truth->mean_m, 1e3 * f->error.mean_m,
+                static_cast<long long>(f->simulations));
+    std::fflush(stdout);
+  }
+  std::fprintf(stderr, "strike recovery: %d of %d fits more than 5 %% above the true strike's error; "
+               "median %.0f simulations a fit\n", misses, scored, Median(sims));
+}
+
 }  // namespace
 }  // namespace sportsim::billiards
 
@@ -377,10 +418,12 @@ int main(int argc, char** argv) {
   bool synthetic = true;
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
-  bool aimed = false;
+  bool aimed = false, strike_recovery = false;
   std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--quick")) {
+    if (!std::strcmp(argv[i], "--strike-recovery")) {
+      strike_recovery = true;
+    } else if (!std::strcmp(argv[i], "--quick")) {
       shots = 4;
     } else if (!std::strcmp(argv[i], "--shots") && i + 1 < argc) {
       shots = std::max(2, std::atoi(argv[++i]));
@@ -426,9 +469,13 @@ int main(int argc, char** argv) {
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
-                   "[--fit-elevation]\n");
+                   "[--fit-elevation] [--strike-recovery]\n");
       return 2;
     }
+  }
+  if (strike_recovery) {
+    StrikeRecovery(shots, aimed);
+    return 0;
   }
   std::printf("source,model,constants,fit_mm,fit_rails,predict_final_mm,predict_rails,cpu_us,shots\n");
   if (!write_set.empty() && !WriteShotSet(write_set, *MakeTablePreset("carom"), Synthetic(shots, 33))) {

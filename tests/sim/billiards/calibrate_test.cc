@@ -265,6 +265,49 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikeOnATrackersClock) {
   EXPECT_GT(start_errors[start_errors.size() / 2], 50e-3);
 }
 
+// Shots on a lively table (Mathavan's measured cushion, restitution 0.98) struck anywhere
+// within 0.25 rad of the first object ball, many missing it, last up to ten seconds, and a
+// hair's change of the strike sends a ball into a corner's other rail first or past a ball
+// it grazed: the score is rugged in the strike, and a fit that carries each start through the
+// windows alone settles where the noise left the early windows' flat directions. The fit's
+// population, resampled between windows from each fit's spread, finds every one of these
+// eight to within 5 % of the true strike's own error (the noise); with each start alone, three
+// of them missed by 2 to 6 mm, and in 128 such shots 27 missed against 15 now.
+TEST(CalibrateTest, FitStrikeFindsTheStrikesOfChaoticShots) {
+  TableSpec spec = Carom();
+  spec.params.cushion_model = CushionModel::kMathavan2010;
+  spec.params.e_cushion_mathavan = 0.98;
+  spec.params.f_cushion_mathavan = 0.14;
+  spec.params.mu_roll = 0.006;
+  const TableModel truth = *TableModel::Create(spec);
+  std::mt19937_64 rng(204);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 8; ++i) {
+    const TableState layout = RandomLayout(truth, rng);
+    const Eigen::Vector3d to = layout.balls[1].r - layout.balls[0].r;
+    CueStrike want;
+    want.ball_speed = true;
+    want.speed_mps = 2.0 + 2.5 * u(rng);
+    want.phi_rad = std::atan2(to.y(), to.x()) + 0.5 * (u(rng) - 0.5);
+    want.a = 0.6 * (u(rng) - 0.5);
+    want.b = 0.6 * (u(rng) - 0.5);
+    const double when = TrackerStrikeTime(i);
+    absl::StatusOr<Recording> rec = SyntheticRecording(
+        truth, SolverOptions{}, layout, 0, want,
+        SyntheticOptions{.rate_hz = 50,
+                         .noise_m = 1e-3,
+                         .seed = static_cast<uint64_t>(400 + i),
+                         .strike_time_s = when,
+                         .keep_strike_time = false});
+    ASSERT_TRUE(rec.ok()) << rec.status();
+    absl::StatusOr<ShotError> noise = ScoreShot(truth, SolverOptions{}, *rec, want, 1e300, when);
+    ASSERT_TRUE(noise.ok()) << noise.status();
+    absl::StatusOr<StrikeFit> fit = FitStrike(truth, SolverOptions{}, *rec);
+    ASSERT_TRUE(fit.ok()) << fit.status();
+    EXPECT_LT(fit->error.mean_m, 1.05 * noise->mean_m) << i;
+  }
+}
+
 // A tracker's false detections (here 3 % of the points, anywhere on the table, and one of the
 // cue ball's before each strike) pull a least-squares fit off: each weighs as its distance
 // squared, a metre's as a million millimetres'. Under Huber's loss (5 mm, five times the
