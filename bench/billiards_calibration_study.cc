@@ -48,11 +48,13 @@
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
-//          [--elevation LO:HI] [--fit-elevation] [--strike-recovery]
+//          [--elevation LO:HI] [--fit-elevation] [--resample] [--strike-recovery]
 //
+// --resample: every strike fit resamples its starts between windows (StrikeBounds::resample);
+// the synthetic source ends in -resample.
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
-// strikes under the reference table itself (StrikeRecovery; --shots, --aimed, --huber and
-// --fit-elevation apply).
+// strikes, each start alone and resampled, under the reference table itself or --preset's
+// (StrikeRecovery; --shots, --aimed, --huber and --fit-elevation apply).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -379,34 +381,40 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
 }
 
 // How well FitStrike finds the strikes of the synthetic recordings under the reference table
-// itself (no model error): for each shot, the mean distance of the true strike's shot from
-// the track (the noise) and of the fitted strike's, and the fit's simulations. CSV on stdout;
-// on stderr, the shots whose fit is more than 5 % above the truth's error.
-void StrikeRecovery(int n, bool aimed) {
+// itself (no model error), or with --preset P under that preset's table: for each shot, the
+// mean distance of the true strike's shot from the track (the noise, under the reference
+// table), and of the strike fitted each start alone (the default) and resampled
+// (StrikeBounds::resample), with each fit's simulations. CSV on stdout; on stderr, how many
+// fits are more than 5 % above the true strike's error.
+void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
   std::vector<Truth> truths;
   const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed, {0, 0}, &truths);
-  const TableModel m = *TableModel::Create(ReferenceTable());
-  std::printf("shot,true_mm,fit_mm,simulations\n");
-  int misses = 0, scored = 0;
-  std::vector<double> sims;
+  const TableModel m = *TableModel::Create(spec);
+  std::printf("shot,true_mm,fit_mm,resampled_mm,simulations,resampled_simulations\n");
+  int misses = 0, resampled_misses = 0, scored = 0;
   for (size_t i = 0; i < recs.size(); ++i) {
     const Truth& t = truths[i];
     absl::StatusOr<ShotError> truth = ScoreShot(m, SolverOptions{}, recs[i], t.strike, 1e300, t.time_s);
-    absl::StatusOr<StrikeFit> f = FitStrike(m, SolverOptions{}, recs[i], strike_bounds, 1e300, huber_m);
-    if (!truth.ok() || !f.ok()) {
+    StrikeBounds resampling = strike_bounds;
+    resampling.resample = true;
+    absl::StatusOr<StrikeFit> alone = FitStrike(m, SolverOptions{}, recs[i], strike_bounds, 1e300, huber_m);
+    absl::StatusOr<StrikeFit> resampled = FitStrike(m, SolverOptions{}, recs[i], resampling, 1e300, huber_m);
+    if (!truth.ok() || !alone.ok() || !resampled.ok()) {
       std::fprintf(stderr, "%s: %s\n", recs[i].name.c_str(),
-                   (truth.ok() ? f.status() : truth.status()).ToString().c_str());
+                   (!truth.ok() ? truth.status() : !alone.ok() ? alone.status() : resampled.status())
+                       .ToString().c_str());
       continue;
     }
     ++scored;
-    misses += f->error.mean_m > 1.05 * truth->mean_m;
-    sims.push_back(static_cast<double>(f->simulations));
-    std::printf("%zu,%.2f,%.2f,%lld\n", i, 1e3 * truth->mean_m, 1e3 * f->error.mean_m,
-                static_cast<long long>(f->simulations));
+    misses += alone->error.mean_m > 1.05 * truth->mean_m;
+    resampled_misses += resampled->error.mean_m > 1.05 * truth->mean_m;
+    std::printf("%zu,%.2f,%.2f,%.2f,%lld,%lld\n", i, 1e3 * truth->mean_m, 1e3 * alone->error.mean_m,
+                1e3 * resampled->error.mean_m, static_cast<long long>(alone->simulations),
+                static_cast<long long>(resampled->simulations));
     std::fflush(stdout);
   }
-  std::fprintf(stderr, "strike recovery: %d of %d fits more than 5 %% above the true strike's error; "
-               "median %.0f simulations a fit\n", misses, scored, Median(sims));
+  std::fprintf(stderr, "strike recovery: fits more than 5 %% above the true strike's error: %d of %d "
+               "each start alone, %d resampled\n", misses, scored, resampled_misses);
 }
 
 }  // namespace
@@ -418,7 +426,7 @@ int main(int argc, char** argv) {
   bool synthetic = true;
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
-  bool aimed = false, strike_recovery = false;
+  bool aimed = false, strike_recovery = false, preset_given = false;
   std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--strike-recovery")) {
@@ -433,6 +441,7 @@ int main(int argc, char** argv) {
       path = argv[++i];
     } else if (!std::strcmp(argv[i], "--preset") && i + 1 < argc) {
       preset = argv[++i];
+      preset_given = true;
     } else if (!std::strcmp(argv[i], "--track-origin") && i + 1 < argc) {
       origin = argv[++i];
     } else if (!std::strcmp(argv[i], "--track-scale") && i + 1 < argc) {
@@ -445,6 +454,8 @@ int main(int argc, char** argv) {
       aimed = true;
     } else if (!std::strcmp(argv[i], "--fit-elevation")) {
       strike_bounds.fit_elevation = true;
+    } else if (!std::strcmp(argv[i], "--resample")) {
+      strike_bounds.resample = true;
     } else if (!std::strcmp(argv[i], "--elevation") && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%lf:%lf", &elevation[0], &elevation[1]) != 2 ||
           !(elevation[0] >= 0.0 && elevation[1] >= elevation[0] && elevation[1] <= 30.0)) {
@@ -469,12 +480,17 @@ int main(int argc, char** argv) {
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
-                   "[--fit-elevation] [--strike-recovery]\n");
+                   "[--fit-elevation] [--resample] [--strike-recovery]\n");
       return 2;
     }
   }
   if (strike_recovery) {
-    StrikeRecovery(shots, aimed);
+    absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);
+    if (preset_given && !spec.ok()) {
+      std::fprintf(stderr, "--preset: %s\n", std::string(spec.status().message()).c_str());
+      return 2;
+    }
+    StrikeRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
     return 0;
   }
   std::printf("source,model,constants,fit_mm,fit_rails,predict_final_mm,predict_rails,cpu_us,shots\n");
@@ -484,7 +500,8 @@ int main(int argc, char** argv) {
   }
   if (synthetic) {
     const std::string source = std::string("synthetic") + (aimed ? "-aimed" : "") +
-                               (elevation[1] > 0.0 ? "-raised" : "");
+                               (elevation[1] > 0.0 ? "-raised" : "") +
+                               (strike_bounds.resample ? "-resample" : "");
     if (false_detections > 0.0) {
       Study(source, *MakeTablePreset("carom"),
             Synthetic(shots, 33, false_detections, aimed, elevation),
@@ -514,7 +531,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: fewer than two usable recordings\n", path.c_str());
       return 1;
     }
-    Study("recorded", *spec, recs);
+    Study(strike_bounds.resample ? "recorded-resample" : "recorded", *spec, recs);
   }
   return 0;
 }

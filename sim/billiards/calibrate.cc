@@ -657,7 +657,7 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
         c.u.conservativeResize(c.map.size());  // the time was the last coordinate
       }
     }
-    if (!last) {
+    if (!last && bounds.resample) {
       if (absl::Status s = Resample(model, solver, rec, windows[w], windows[w + 1], huber_m,
                                     static_cast<int>(w), budget, &pop);
           !s.ok()) {

@@ -110,12 +110,18 @@ absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions
 
 /// What a shot's fitted strike may be: the cue ball's speed just after the strike (ball_speed),
 /// its heading, the tip offsets (each within +-0.7 of the miscue limit, so that both together
-/// stay inside it) and, when fit_elevation, the cue's elevation (else level).
+/// stay inside it) and, when fit_elevation, the cue's elevation (else level); and how it is
+/// searched for.
 struct StrikeBounds {
   double min_speed_mps = 0.05;
   double max_speed_mps = kMaxStrikeSpeed;
   bool fit_elevation = false;
   double max_elevation_deg = 30.0;
+  /// Resample the fit's starts between its windows (docs/billiards.md, "The starts travel
+  /// together"): with the table's model right, half the misses on chaotic shots; under a
+  /// wrong model (every real table) no better on the whole shot and worse at predicting it
+  /// from its start, so off by default.
+  bool resample = false;
 };
 
 /// Fits a shot's strike (and its time, where the recording's is unknown) to its tracked
