@@ -100,15 +100,17 @@ TableSpec ReferenceTable() {
   return s;
 }
 
+// A synthetic shot's true strike and its time on the tracker's clock.
+struct Truth {
+  CueStrike strike;
+  double time_s = 0.0;
+};
+
 // n random three-ball shots. Aimed: each strike's line passes within 0.9 of a ball's diameter
 // of the first object ball's centre, so that the cue ball meets it first, as in most
 // three-cushion shots; else within +-0.25 rad of its centre, and many miss it.
 // A cue elevation in [elevation_deg[0], elevation_deg[1]] degrees (drawn from its own
 // generator, so the shots are the same otherwise).
-struct Truth {
-  CueStrike strike;
-  double time_s = 0.0;
-};
 std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections = 0.0,
                                  bool aimed = false, std::array<double, 2> elevation_deg = {0, 0},
                                  std::vector<Truth>* truths = nullptr) {

@@ -518,11 +518,13 @@ struct Candidate {
 //    the coordinates);
 //  - of the kept and the drawn, as many as the population holds go on, those with the least
 //    loss on the next window: the ones whose fit there starts nearest.
-// Measured with billiards_calibration_study --strike-recovery (docs/billiards.md): the
-// strikes of random three-cushion shots fitted under the true table, a miss more than 5 %
-// above the true strike's error in 16 of 120 shots against 30 with each start fitted on its
-// own through the windows, for the same number of simulations.
-// Draws are seeded: the same recording gives the same fit.
+// Draws are seeded: the same recording gives the same fit. StrikeBounds::resample; off by
+// default. Measured with billiards_calibration_study --strike-recovery (docs/billiards.md,
+// "Resampled starts"): fitting random three-cushion shots under their own table, it misses
+// (more than 5 % above the true strike's error) 15 of 120 against 30 with each start alone,
+// for the same simulations. Under a wrong model, which every real table's is somewhere, it
+// is no better on the whole shot, and its draws along what the early windows leave flat (the
+// spin) make predictions from a shot's first 0.4 s worse.
 constexpr double kPruneChi2 = 25.0;
 constexpr size_t kDraws = 2;
 constexpr size_t kMinParents = 5;

@@ -266,14 +266,14 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikeOnATrackersClock) {
 }
 
 // Shots on a lively table (Mathavan's measured cushion, restitution 0.98) struck anywhere
-// within 0.25 rad of the first object ball, many missing it, last up to ten seconds, and a
+// within 0.25 rad of the first object ball, many missing it, run for seconds, and a
 // hair's change of the strike sends a ball into a corner's other rail first or past a ball
 // it grazed: the score is rugged in the strike, and a fit that carries each start through the
 // windows alone settles where the noise left the early windows' flat directions. The fit's
 // population, resampled between windows from each fit's spread (StrikeBounds::resample),
 // finds every one of these eight to within 5 % of the true strike's own error (the noise);
-// the default fit, each start alone, misses three of them by 2 to 6 mm (in 128 such shots,
-// 27 against 15).
+// the default fit, each start alone, missed three of them by 2 to 6 mm when this was written
+// (in 128 such shots, 27 against 15). Fitted twice, a shot gives the same strike to the bit.
 TEST(CalibrateTest, FitStrikeFindsTheStrikesOfChaoticShots) {
   TableSpec spec = Carom();
   spec.params.cushion_model = CushionModel::kMathavan2010;
@@ -283,7 +283,6 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikesOfChaoticShots) {
   const TableModel truth = *TableModel::Create(spec);
   std::mt19937_64 rng(204);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  int alone_missed = 0;  // by the default fit, each start alone
   for (int i = 0; i < 8; ++i) {
     const TableState layout = RandomLayout(truth, rng);
     const Eigen::Vector3d to = layout.balls[1].r - layout.balls[0].r;
@@ -308,9 +307,18 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikesOfChaoticShots) {
         FitStrike(truth, SolverOptions{}, *rec, StrikeBounds{.resample = true});
     ASSERT_TRUE(fit.ok()) << fit.status();
     EXPECT_LT(fit->error.mean_m, 1.05 * noise->mean_m) << i;
-    alone_missed += FitStrike(truth, SolverOptions{}, *rec)->error.mean_m > 1.05 * noise->mean_m;
+    if (i == 0) {  // the draws are seeded: the same recording, the same fit to the bit
+      absl::StatusOr<StrikeFit> again =
+          FitStrike(truth, SolverOptions{}, *rec, StrikeBounds{.resample = true});
+      ASSERT_TRUE(again.ok()) << again.status();
+      EXPECT_EQ(again->strike.speed_mps, fit->strike.speed_mps);
+      EXPECT_EQ(again->strike.phi_rad, fit->strike.phi_rad);
+      EXPECT_EQ(again->strike.a, fit->strike.a);
+      EXPECT_EQ(again->strike.b, fit->strike.b);
+      EXPECT_EQ(again->strike_time_s, fit->strike_time_s);
+      EXPECT_EQ(again->simulations, fit->simulations);
+    }
   }
-  EXPECT_EQ(alone_missed, 3);
 }
 
 // A tracker's false detections (here 3 % of the points, anywhere on the table, and one of the
