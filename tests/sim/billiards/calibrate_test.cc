@@ -266,9 +266,9 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikeOnATrackersClock) {
 }
 
 // Shots on a lively table (Mathavan's measured cushion, restitution 0.98) struck anywhere
-// within 0.25 rad of the first object ball, many missing it, run for seconds, and a
-// hair's change of the strike sends a ball into a corner's other rail first or past a ball
-// it grazed: the score is rugged in the strike, and a fit that carries each start through the
+// within 0.25 rad of the first object ball, many missing it, run for seconds, and a hair's
+// change of the strike is centimetres after a corner or a graze: the score is rugged in the
+// strike, and a fit that carries each start through the
 // windows alone settles where the noise left the early windows' flat directions. The fit's
 // population, resampled between windows from each fit's spread (StrikeBounds::resample),
 // finds every one of these eight to within 5 % of the true strike's own error (the noise);
