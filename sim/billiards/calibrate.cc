@@ -493,7 +493,8 @@ absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, 
 
 // One of FitStrike's strikes as it is carried from window to window: its coordinates, its
 // map (the strike's time held after the first window), the start whose tip offsets its prior
-// pulls toward, and its loss on the window last fitted.
+// pulls toward, and Resample's sort key: its loss on the window Resample last scored it on
+// (the window fitted, then the next one).
 struct Candidate {
   VectorXd u;
   StrikeMap map;
@@ -641,7 +642,7 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
     s0.phi_rad = motion->first;
     s0.a = a;
     s0.b = b;
-    Candidate c{VectorXd(k), map, VectorXd(), 0.0};
+    Candidate c{VectorXd(k), map, VectorXd()};
     map.FromTimed({s0, clock.t0}, c.u.data());
     c.start = c.u;
     pop.push_back(std::move(c));
