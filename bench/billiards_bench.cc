@@ -8,8 +8,10 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <random>
+#include <string>
 
 #include "absl/strings/str_format.h"
 #include "bench/billiards_scenes.h"
@@ -17,6 +19,7 @@
 #include "sim/billiards/cloth.h"
 #include "sim/billiards/collision.h"
 #include "sim/billiards/shot.h"
+#include "sim/core/units.h"
 
 namespace sportsim::billiards {
 namespace {
@@ -167,17 +170,31 @@ BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillis
 
 // One impact per iteration, cycling through 256 random approaches (0.05-3 m/s into the rail,
 // up to 3 m/s along it, spins to 150 rad/s) on the pool-9ft nose. range(0): the CushionModel.
+// One cushion impact of each model: arg 0 the model, arg 1 the approaches: 0 random (any
+// heading into the rail, every spin component up to 150 rad/s), 1 rolling balls with side spin
+// up to 100 rad/s (the common impact in play).
 void BM_CushionImpact(benchmark::State& state) {
   TableSpec spec = *MakeTablePreset("pool-9ft");
   spec.params.cushion_model = static_cast<CushionModel>(state.range(0));
   const TableModel model = *TableModel::Create(spec);
-  state.SetLabel(state.range(0) == 0 ? "han" : state.range(0) == 2 ? "mathavan2010" : "stronge");
+  const bool rolling = state.range(1) == 1;
+  state.SetLabel(std::string(state.range(0) == 0   ? "han"
+                             : state.range(0) == 2 ? "mathavan2010"
+                                                   : "stronge") +
+                 (rolling ? ", rolling" : ", random"));
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::vector<Ball> balls(256);
   for (Ball& b : balls) {
-    b.v = {3.0 * u(rng), 0.05 + 1.475 * (1.0 + u(rng)), 0.0};
-    b.w = {150.0 * u(rng), 150.0 * u(rng), 150.0 * u(rng)};
+    if (rolling) {
+      const double speed = 2.0 + 1.8 * u(rng), heading = 0.5 * kPi + 1.45 * u(rng);
+      b.v = {speed * std::cos(heading), speed * std::sin(heading), 0.0};
+      b.w = Eigen::Vector3d::UnitZ().cross(b.v) / model.radius();
+      b.w.z() = 100.0 * u(rng);
+    } else {
+      b.v = {3.0 * u(rng), 0.05 + 1.475 * (1.0 + u(rng)), 0.0};
+      b.w = {150.0 * u(rng), 150.0 * u(rng), 150.0 * u(rng)};
+    }
     b.state = Classify(model, b);
   }
   size_t i = 0;
@@ -189,9 +206,10 @@ void BM_CushionImpact(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_CushionImpact)
-    ->Arg(static_cast<int>(CushionModel::kHan))
-    ->Arg(static_cast<int>(CushionModel::kStrongeCompliant))
-    ->Arg(static_cast<int>(CushionModel::kMathavan2010))
+    ->ArgsProduct({{static_cast<int>(CushionModel::kHan),
+                    static_cast<int>(CushionModel::kStrongeCompliant),
+                    static_cast<int>(CushionModel::kMathavan2010)},
+                   {0, 1}})
     ->Unit(benchmark::kNanosecond);
 
 }  // namespace

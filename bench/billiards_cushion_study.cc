@@ -3,11 +3,12 @@
 //
 // The reference: Mathavan et al.'s model with the constants they fitted to their snooker
 // cushion experiments (restitution 0.98, cushion friction 0.14, slate friction 0.212; the nose
-// at 7R/5, a 52.5 mm ball), integrated with 5000 impulse steps, over the range where they found
-// it valid (normal speeds up to 2.5 m/s): approach angles 10-90 deg to the rail, speeds 0.5-2.5
-// m/s, stun or natural roll, no side spin or half the speed's worth (w_z R = +-V/2). What each
-// model gives just after the impact is compared with it: the rebound angle to the rail (deg),
-// the rebound speed (relative) and the spin (R w, over the approach speed; not fitted).
+// at 7R/5, a 52.5 mm ball), integrated with a finest impulse step of 1/5000, over the range
+// where they found it valid (normal speeds up to 2.5 m/s): approach angles 10-90 deg to the
+// rail, speeds 0.5-2.5 m/s, stun or natural roll, no side spin or half the speed's worth (w_z R
+// = +-V/2). What each model gives just after the impact is compared with it: the rebound angle
+// to the rail (deg), the rebound speed (relative) and the spin (R w, over the approach speed;
+// not fitted).
 //
 // Each of Han's and Stronge's models is scored with the snooker preset's constants (restitution
 // 0.85, friction 0.2) and with its restitution and friction fitted to the curves (least squares

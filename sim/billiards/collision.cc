@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "sim/billiards/cloth.h"
+#include "sim/core/ode/runge_kutta.h"
 #include "sim/core/root_find.h"
 #include "sim/core/units.h"
 
@@ -176,79 +177,162 @@ bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Bal
 // Mathavan, Jackson and Parkin (2010), integrated over the normal impulse P at the nose I. The
 // cushion frame: y toward the cushion (-normal), z up, x = y x z along the rail. The nose
 // touches the ball at angle theta above its equator (sin theta = (h - R) / R); the slate at C
-// below. Each step dP moves the ball by the nose's normal impulse and the two sliding
+// below. The impulse dP moves the ball by the nose's normal impulse and the two sliding
 // frictions (mu_w at I, mu_s at C, whose normal load is dP (sin theta + mu_w sin phi
-// cos theta)), each opposing its contact's slip direction (phi at I, phi' at C) at that step.
+// cos theta)), each opposing its contact's slip direction (phi at I, phi' at C) as it then is.
 // Compression lasts while the ball still moves into the cushion; restitution stops when the
 // normal work at I, W = integral of the nose's normal velocity dP, has come back down to
 // (1 - e^2) of its value at the end of compression.
+namespace {
+
+// The state (vx, vy, wx, wy, wz, W) and its rates per unit of normal impulse at the nose.
+using MathavanState = Eigen::Matrix<double, 6, 1>;
+
+class MathavanRates {
+ public:
+  MathavanRates(double m, double radius, double sin_theta, double mu_cushion, double mu_slate,
+                double slip_floor)
+      : radius_(radius), st_(sin_theta), ct_(std::sqrt(1.0 - sin_theta * sin_theta)),
+        mw_(mu_cushion), ms_(mu_slate), kv_(1.0 / m), kw_(2.5 / (m * radius)),
+        floor_(slip_floor) {}
+
+  double cos_theta() const { return ct_; }
+
+  MathavanState operator()(double /*p*/, const MathavanState& z) const {
+    const double ux = z[0], uy = z[1], ox = z[2], oy = z[3], oz = z[4];
+    const double sx = ux + oy * radius_ * st_ - oz * radius_ * ct_;  // slip at I, across the nose
+    const double sy = -uy * st_ + ox * radius_;
+    const double cx = ux - oy * radius_;  // slip at C, on the slate
+    const double cy = uy + ox * radius_;
+    const double s = std::sqrt(sx * sx + sy * sy), c = std::sqrt(cx * cx + cy * cy);
+    // A slip within rounding of zero has no direction of its own: none at the nose (no
+    // friction), and at the slate the one the nose's impulse alone gives it. A ball rolling
+    // into the cushion starts so (its slip at C is zero but for rounding), and its slip there
+    // grows along that direction from the first instant.
+    const double cphi = s > floor_ ? sx / s : 0.0, sphi = s > floor_ ? sy / s : 0.0;
+    double cphi2 = 0.0, sphi2 = 0.0;
+    if (c > floor_) {
+      cphi2 = cx / c;
+      sphi2 = cy / c;
+    } else {
+      const double ax = -kv_ * mw_ * cphi + radius_ * kw_ * mw_ * cphi * st_;
+      const double ay = -kv_ * (ct_ - mw_ * st_ * sphi) - radius_ * kw_ * mw_ * sphi;
+      const double a = std::sqrt(ax * ax + ay * ay);
+      if (a > 0.0) {
+        cphi2 = ax / a;
+        sphi2 = ay / a;
+      }
+    }
+    const double load = st_ + mw_ * sphi * ct_;  // the slate's normal impulse per dP
+    MathavanState d;
+    d[0] = -kv_ * (mw_ * cphi + ms_ * cphi2 * load);
+    d[1] = -kv_ * (ct_ - mw_ * st_ * sphi + ms_ * sphi2 * load);
+    d[2] = -kw_ * (mw_ * sphi + ms_ * sphi2 * load);
+    d[3] = -kw_ * (mw_ * cphi * st_ - ms_ * cphi2 * load);
+    d[4] = kw_ * (mw_ * cphi * ct_);
+    d[5] = uy * ct_;  // the nose's normal velocity
+    return d;
+  }
+
+ private:
+  double radius_, st_, ct_, mw_, ms_, kv_, kw_, floor_;
+};
+
+}  // namespace
+
+// The impact is smooth in P but where a contact's slip passes through zero, so it is integrated
+// by Dormand and Prince's 5(4) pair under error control (each step's error estimate within
+// kMathavanTolerance of the ball's speed, in velocity and R w), with the phase ends found by
+// Newton's method on the last step's length. Where a slip sticks at zero (the Coulomb friction
+// then flips at every step and no higher order helps) the steps fall to the finest,
+// (1 + e) m v_n / cushion_impulse_steps, taken by the cheaper midpoint rule; the embedded pair
+// is tried again after a number of fine steps that doubles while it keeps failing.
 void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, double e,
                             double mu_cushion, double mu_slate, Ball* ball) {
+  constexpr double kMathavanTolerance = 1e-8;
   const PhysicsParams& p = model.params();
   const Eigen::Vector3d ey = -nh, ez = Eigen::Vector3d::UnitZ(), ex = ey.cross(ez);
   const double m = model.mass(), radius = model.radius();
-  const double st = model.cushion_sin(), ct = std::sqrt(1.0 - st * st);
-  const double mw = mu_cushion, ms = mu_slate;
-  double vx = ball->v.dot(ex), vy = ball->v.dot(ey);
-  double wx = ball->w.dot(ex), wy = ball->w.dot(ey), wz = ball->w.dot(ez);
-  const int steps = static_cast<int>(p.cushion_impulse_steps);
-  const double dp = (1.0 + e) * m * vy / steps;
-  const double kv = dp / m, kw = 2.5 * dp / (m * radius);
-  double work = 0.0, work_compression = 0.0;
-  bool compressing = true;
-  // Restitution takes about e steps for each of compression's; the cap only guards. Each step's
-  // increments are constant over it, so the two phase ends are placed inside their step by
-  // interpolation: the compression's work where vy crosses 0, and the last step cut where the
-  // work reaches its target. With the midpoint rule the error falls as 1/N^2.
-  for (int k = 0; k < 4 * steps + 8; ++k) {
-    // The increments of one step from a state: each friction against its contact's slip.
-    auto increments = [&](double ux, double uy, double ox, double oy, double oz, double d[5]) {
-      const double sx = ux + oy * radius * st - oz * radius * ct;  // slip at I, across the nose
-      const double sy = -uy * st + ox * radius;
-      const double cx = ux - oy * radius;                          // slip at C, on the slate
-      const double cy = uy + ox * radius;
-      const double s = std::hypot(sx, sy), c = std::hypot(cx, cy);
-      const double cphi = s > 0.0 ? sx / s : 0.0, sphi = s > 0.0 ? sy / s : 0.0;
-      const double cphi2 = c > 0.0 ? cx / c : 0.0, sphi2 = c > 0.0 ? cy / c : 0.0;
-      const double load = st + mw * sphi * ct;  // the slate's normal impulse per dP
-      d[0] = -kv * (mw * cphi + ms * cphi2 * load);
-      d[1] = -kv * (ct - mw * st * sphi + ms * sphi2 * load);
-      d[2] = -kw * (mw * sphi + ms * sphi2 * load);
-      d[3] = -kw * (mw * cphi * st - ms * cphi2 * load);
-      d[4] = kw * (mw * cphi * ct);
-    };
-    // The midpoint rule: the slip directions taken half a step in (second order in dP).
-    double d[5];
-    increments(vx, vy, wx, wy, wz, d);
-    increments(vx + 0.5 * d[0], vy + 0.5 * d[1], wx + 0.5 * d[2], wy + 0.5 * d[3], wz + 0.5 * d[4], d);
-    const double dvx = d[0], dvy = d[1], dwx = d[2], dwy = d[3], dwz = d[4];
-    const double dwork = 0.5 * dp * (2.0 * vy + dvy) * ct;  // the nose's normal velocity, trapezoid
-    double f = 1.0;  // the share of this step taken
-    bool done = false;
-    if (compressing && vy + dvy <= 0.0) {
+  MathavanState z;
+  z << ball->v.dot(ex), ball->v.dot(ey), ball->w.dot(ex), ball->w.dot(ey), ball->w.dot(ez), 0.0;
+  const double speed = ball->v.norm() + radius * ball->w.norm();
+  const MathavanRates rates(m, radius, model.cushion_sin(), mu_cushion, mu_slate, 1e-9 * speed);
+  const double tol = kMathavanTolerance * speed;
+  const double total = (1.0 + e) * m * z[1];  // the frictionless impact's impulse
+  const double steps = p.cushion_impulse_steps;
+  const double h_min = total / steps, h_max = 0.5 * total;
+  auto error_of = [radius](const MathavanState& err) {
+    return std::max({std::abs(err[0]), std::abs(err[1]), radius * std::abs(err[2]),
+                     radius * std::abs(err[3]), radius * std::abs(err[4])});
+  };
+  // One step of length h from z (k1 its rates): the new state, its rates, the error estimate
+  // (the midpoint rule's is not estimated: it is only taken at the finest step).
+  auto step = [&](bool fine, double h, const MathavanState& k1, MathavanState* out,
+                  MathavanState* k_out) {
+    if (fine) {
+      *out = z + h * rates(0.0, z + (0.5 * h) * k1);
+      *k_out = rates(0.0, *out);
+      return 0.0;
+    }
+    ode::Dp45Stages<MathavanState> stages;
+    *out = ode::Dp45Solution(rates, 0.0, h, z, k1, &stages, h);
+    *k_out = rates(0.0, *out);
+    return error_of(ode::Dp45Error(h, k1, stages, *k_out));
+  };
+  MathavanState k1 = rates(0.0, z), next, k_next;
+  bool compressing = true, rejected = false;
+  double target = 0.0, h = 0.125 * total;
+  int fine_left = 0, fine_run = 1;
+  // Compression ends where vy falls to 0; restitution where W falls to its target. Each is
+  // monotone in P (the nose's normal impulse slows vy; W falls while vy < 0).
+  auto phase_end = [&](const MathavanState& s) { return compressing ? s[1] : s[5] - target; };
+  const int cap = 8 * static_cast<int>(steps) + 64;  // guards only: the fine steps alone end it
+  for (int k = 0; k < cap; ++k) {
+    const bool fine = fine_left > 0 || h <= h_min;
+    if (fine) h = h_min;
+    const double err = step(fine, h, k1, &next, &k_next);
+    if (!fine && !(err <= tol)) {
+      h = std::max(h_min, h * ode::Dp45StepFactor(err / tol, rejected));
+      rejected = true;
+      if (h <= h_min) {  // the pair cannot meet the tolerance above the finest step
+        fine_left = fine_run;
+        fine_run = std::min(2 * fine_run, 64);
+      }
+      continue;
+    }
+    if (phase_end(next) <= 0.0) {
+      // The phase ends inside this step: Newton's method on the step's length, each iterate a
+      // step of the same rule from z (the phase's quantity falls at the rate k_next gives).
+      double hh = h;
+      for (int it = 0; it < 6; ++it) {
+        const double slope = compressing ? k_next[1] : k_next[5];
+        if (!(slope < 0.0)) break;
+        const double h_new = std::clamp(hh - phase_end(next) / slope, 0.0, h);
+        if (std::abs(h_new - hh) <= 1e-13 * total) break;
+        hh = h_new;
+        step(fine, hh, k1, &next, &k_next);
+      }
+      z = next;
+      k1 = k_next;
+      if (!compressing) break;
       compressing = false;
-      const double g = dvy < 0.0 ? vy / -dvy : 0.0;  // where vy = 0 inside the step
-      work_compression = work + 0.5 * dp * g * (2.0 * vy + g * dvy) * ct;
+      target = (1.0 - e * e) * z[5];
+      if (e == 0.0) break;
+      rejected = false;
+      continue;
     }
-    if (!compressing && work + dwork <= (1.0 - e * e) * work_compression) {
-      // The work at a share f of the step is quadratic in f; take its root in [0, 1].
-      const double a = 0.5 * dp * dvy * ct, b = dp * vy * ct;
-      const double target = (1.0 - e * e) * work_compression - work;  // <= 0
-      f = a != 0.0 ? (-b - std::sqrt(std::max(0.0, b * b + 4.0 * a * target))) / (2.0 * a)
-                   : (b != 0.0 ? target / b : 1.0);
-      if (!(f >= 0.0 && f <= 1.0)) f = std::clamp(f, 0.0, 1.0);
-      done = true;
+    z = next;
+    k1 = k_next;
+    if (fine) {
+      if (--fine_left <= 0) h = 2.0 * h_min;
+    } else {
+      fine_run = 1;
+      h = std::min(h_max, h * ode::Dp45StepFactor(err / tol, rejected));
     }
-    vx += f * dvx;
-    vy += f * dvy;
-    wx += f * dwx;
-    wy += f * dwy;
-    wz += f * dwz;
-    work += f * (dp * vy * ct - 0.5 * f * dp * dvy * ct);
-    if (done) break;
+    rejected = false;
   }
-  ball->v = vx * ex + vy * ey;  // the slate holds the ball down: no vertical velocity
-  ball->w = wx * ex + wy * ey + wz * ez;
+  ball->v = z[0] * ex + z[1] * ey;  // the slate holds the ball down: no vertical velocity
+  ball->w = z[2] * ex + z[3] * ey + z[4] * ez;
 }
 
 // Stronge's compliant contact, in time tau = omega_n t (omega_n the normal spring's frequency)
