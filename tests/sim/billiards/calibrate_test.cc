@@ -60,17 +60,24 @@ TableState RandomLayout(const TableModel& m, std::mt19937_64& rng) {
 }
 
 // A strike aimed at the first object ball give or take 10 degrees (so that balls collide),
-// at 1.5 to 4 m/s, with the tip anywhere within 0.3 R of the centre.
-CueStrike RandomStrike(const TableState& s, std::mt19937_64& rng) {
+// at 1.5 to 4 m/s, with the tip anywhere within 0.3 R of the centre; or from `min_speed` to 2.5
+// m/s more, within `aim_spread` (radians, the whole width) of the first object ball.
+CueStrike RandomStrike(const TableState& s, std::mt19937_64& rng, double min_speed = 1.5,
+                       double aim_spread = 20 * kDeg) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const Eigen::Vector3d to = s.balls[1].r - s.balls[0].r;
   CueStrike c;
   c.ball_speed = true;
-  c.speed_mps = 1.5 + 2.5 * u(rng);
-  c.phi_rad = std::atan2(to.y(), to.x()) + (u(rng) - 0.5) * 20 * kDeg;
+  c.speed_mps = min_speed + 2.5 * u(rng);
+  c.phi_rad = std::atan2(to.y(), to.x()) + (u(rng) - 0.5) * aim_spread;
   c.a = 0.6 * (u(rng) - 0.5);
   c.b = 0.6 * (u(rng) - 0.5);
   return c;
+}
+
+// A lively strike: 2-4.5 m/s, within 0.25 rad of the first object ball (many miss it).
+CueStrike LivelyStrike(const TableState& layout, std::mt19937_64& rng) {
+  return RandomStrike(layout, rng, 2.0, 0.5);
 }
 
 // The strike's time on a tracker's clock that starts before it: 0.1 to 0.6 s, anywhere within
@@ -210,17 +217,10 @@ TEST(CalibrateTest, ShotsAreSmoothInTheStrike) {
     spec.params.cushion_model = cm;
     const TableModel model = *TableModel::Create(spec);
     std::mt19937_64 rng(77);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<double> moves;
     for (int i = 0; i < 30; ++i) {
       const TableState layout = RandomLayout(model, rng);
-      const Eigen::Vector3d to = layout.balls[1].r - layout.balls[0].r;
-      CueStrike strike;
-      strike.ball_speed = true;
-      strike.speed_mps = 2.0 + 2.5 * u(rng);
-      strike.phi_rad = std::atan2(to.y(), to.x()) + 0.5 * (u(rng) - 0.5);
-      strike.a = 0.6 * (u(rng) - 0.5);
-      strike.b = 0.6 * (u(rng) - 0.5);
+      const CueStrike strike = LivelyStrike(layout, rng);
       auto rests = [&](double factor) {
         CueStrike scaled = strike;
         scaled.speed_mps *= factor;
@@ -338,18 +338,11 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikesOfChaoticShots) {
   spec.params.mu_roll = 0.006;
   const TableModel truth = *TableModel::Create(spec);
   std::mt19937_64 rng(204);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   int resampled_missed = 0, alone_missed = 0;
   double resampled_excess = 0.0, alone_excess = 0.0;
   for (int i = 0; i < 8; ++i) {
     const TableState layout = RandomLayout(truth, rng);
-    const Eigen::Vector3d to = layout.balls[1].r - layout.balls[0].r;
-    CueStrike want;
-    want.ball_speed = true;
-    want.speed_mps = 2.0 + 2.5 * u(rng);
-    want.phi_rad = std::atan2(to.y(), to.x()) + 0.5 * (u(rng) - 0.5);
-    want.a = 0.6 * (u(rng) - 0.5);
-    want.b = 0.6 * (u(rng) - 0.5);
+    const CueStrike want = LivelyStrike(layout, rng);
     const double when = TrackerStrikeTime(i);
     absl::StatusOr<Recording> rec = SyntheticRecording(
         truth, SolverOptions{}, layout, 0, want,
