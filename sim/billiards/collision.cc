@@ -196,8 +196,6 @@ class MathavanRates {
         mw_(mu_cushion), ms_(mu_slate), kv_(1.0 / m), kw_(2.5 / (m * radius)),
         floor_(slip_floor) {}
 
-  double cos_theta() const { return ct_; }
-
   MathavanState operator()(double /*p*/, const MathavanState& z) const {
     const double ux = z[0], uy = z[1], ox = z[2], oy = z[3], oz = z[4];
     const double sx = ux + oy * radius_ * st_ - oz * radius_ * ct_;  // slip at I, across the nose
