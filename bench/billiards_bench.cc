@@ -168,11 +168,10 @@ void BM_RackShots(benchmark::State& state) {
 }
 BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillisecond);
 
-// One impact per iteration, cycling through 256 random approaches (0.05-3 m/s into the rail,
-// up to 3 m/s along it, spins to 150 rad/s) on the pool-9ft nose. range(0): the CushionModel.
-// One cushion impact of each model: arg 0 the model, arg 1 the approaches: 0 random (any
-// heading into the rail, every spin component up to 150 rad/s), 1 rolling balls with side spin
-// up to 100 rad/s (the common impact in play).
+// One impact per iteration, cycling through 256 approaches on the pool-9ft nose. range(0): the
+// CushionModel; range(1): the approaches, 0 random (0.05-3 m/s into the rail, up to 3 m/s along
+// it, every spin component up to 150 rad/s), 1 rolling balls at 0.2-3.8 m/s from any heading
+// into the rail, with side spin up to 100 rad/s (the common impact in play).
 void BM_CushionImpact(benchmark::State& state) {
   TableSpec spec = *MakeTablePreset("pool-9ft");
   spec.params.cushion_model = static_cast<CushionModel>(state.range(0));
