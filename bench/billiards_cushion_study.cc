@@ -3,7 +3,7 @@
 //
 // The reference: Mathavan et al.'s model with the constants they fitted to their snooker
 // cushion experiments (restitution 0.98, cushion friction 0.14, slate friction 0.212; the nose
-// at 7R/5, a 52.5 mm ball), integrated with a finest impulse step of 1/5000, over the range
+// at 7R/5, a 52.5 mm ball), integrated with a fallback impulse step of 1/5000, over the range
 // where they found it valid (normal speeds up to 2.5 m/s): approach angles 10-90 deg to the
 // rail, speeds 0.5-2.5 m/s, stun or natural roll, no side spin or half the speed's worth (w_z R
 // = +-V/2). What each model gives just after the impact is compared with it: the rebound angle
@@ -13,8 +13,8 @@
 // Each of Han's and Stronge's models is scored with the snooker preset's constants (restitution
 // 0.85, friction 0.2) and with its restitution and friction fitted to the curves (least squares
 // of the angle in radians and the relative speed, on a grid refined twice); Stronge's model at
-// the rubber's Poisson ratio 0.5 and at 0.3. Mathavan's own model at its default 500 steps
-// shows its integration error. CPU: the median over 5 passes of the calling thread's CPU per
+// the rubber's Poisson ratio 0.5 and at 0.3. Mathavan's own model at its default fallback step
+// (1/500) shows what that step changes. CPU: the median over 5 passes of the calling thread's CPU per
 // impact.
 //
 // CSV on stdout: model,constants,e,f,angle_rms_deg,angle_max_deg,speed_rms_pct,spin_rms_pct,

@@ -1,7 +1,9 @@
 #include "sim/billiards/collision.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "sim/billiards/cloth.h"
@@ -177,31 +179,78 @@ bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Bal
 // Mathavan, Jackson and Parkin (2010), integrated over the normal impulse P at the nose I. The
 // cushion frame: y toward the cushion (-normal), z up, x = y x z along the rail. The nose
 // touches the ball at angle theta above its equator (sin theta = (h - R) / R); the slate at C
-// below. The impulse dP moves the ball by the nose's normal impulse and the two sliding
-// frictions (mu_w at I, mu_s at C, whose normal load is dP (sin theta + mu_w sin phi
-// cos theta)), each opposing its contact's slip direction (phi at I, phi' at C) as it then is.
-// Compression lasts while the ball still moves into the cushion; restitution stops when the
-// normal work at I, W = integral of the nose's normal velocity dP, has come back down to
-// (1 - e^2) of its value at the end of compression.
+// below. The impulse dP moves the ball by the nose's normal impulse and the two contacts'
+// friction: at I, fx along the rail and ft along the nose's tangent (0, -sin theta, cos theta);
+// at C, gx and gy, under the slate's normal load N = sin theta - ft cos theta (what keeps the
+// ball on the slate). A sliding contact's friction is mu times its load against its slip (the
+// directions phi at I and phi' at C of the paper); a stuck contact's is whatever holds its slip,
+// for as long as that lies within mu times its load. Compression lasts while the ball still
+// moves into the cushion; restitution stops when the normal work at I, W = integral of the
+// nose's normal velocity dP, has come back down to (1 - e^2) of its value at the end of
+// compression.
 namespace {
 
 // The state (vx, vy, wx, wy, wz, W) and its rates per unit of normal impulse at the nose.
 using MathavanState = Eigen::Matrix<double, 6, 1>;
+// The friction per unit dP: (fx, ft) at the nose, (gx, gy) at the slate.
+using MathavanFriction = Eigen::Vector4d;
+
+// How a contact grips. Sliding: its friction opposes its slip. Stuck: its friction holds its
+// slip. At the edge: its slip has just left zero (it came unstuck, or reached zero where its
+// friction could not hold it) and is still tiny: the friction lies on the cone's edge along the
+// one direction in which the slip grows along itself. The slip's own direction turns toward
+// that one at a rate of order mu / |slip|, far faster than anything else in the impact, so
+// taking it there at once is exact as the slip goes to zero (and taking the slip's own
+// direction makes the equations too stiff to step there).
+enum class Grip { kSliding, kStuck, kEdge };
+
+struct SlipContact {
+  Grip grip = Grip::kSliding;
+  Eigen::Vector2d offset = Eigen::Vector2d::Zero();  // the slip it last stuck or left zero at
+};
 
 class MathavanRates {
  public:
-  MathavanRates(double m, double radius, double sin_theta, double mu_cushion, double mu_slate,
-                double slip_floor)
-      : radius_(radius), st_(sin_theta), ct_(std::sqrt(1.0 - sin_theta * sin_theta)),
-        mw_(mu_cushion), ms_(mu_slate), kv_(1.0 / m), kw_(2.5 / (m * radius)),
-        floor_(slip_floor) {}
+  static constexpr int kNose = 0, kSlate = 1;
 
-  MathavanState operator()(double /*p*/, const MathavanState& z) const {
-    const double ux = z[0], uy = z[1], ox = z[2], oy = z[3], oz = z[4];
-    const double sx = ux + oy * radius_ * st_ - oz * radius_ * ct_;  // slip at I, across the nose
-    const double sy = -uy * st_ + ox * radius_;
-    const double cx = ux - oy * radius_;  // slip at C, on the slate
-    const double cy = uy + ox * radius_;
+  using Contacts = std::array<SlipContact, 2>;
+
+  // The rates under the grips in `contact`, which the caller changes between steps.
+  MathavanRates(double m, double radius, double sin_theta, double mu_cushion, double mu_slate,
+                double slip_floor, const Contacts* contact)
+      : contact_(contact), radius_(radius), st_(sin_theta),
+        ct_(std::sqrt(1.0 - sin_theta * sin_theta)), mw_(mu_cushion), ms_(mu_slate),
+        kv_(1.0 / m), kw_(2.5 / (m * radius)), floor_(slip_floor) {}
+  // The same rates under other grips.
+  MathavanRates(const MathavanRates& rates, const Contacts* contact)
+      : MathavanRates(rates) {
+    contact_ = contact;
+  }
+
+  // Contact j's slip in the state z (before its offset), or the slip's rate in the rates z: at
+  // the nose across it (x) and along its tangent; at the slate in x and y.
+  Eigen::Vector2d Slip(int j, const MathavanState& z) const {
+    if (j == kNose) {
+      return {z[0] + z[3] * radius_ * st_ - z[4] * radius_ * ct_, -z[1] * st_ + z[2] * radius_};
+    }
+    return {z[0] - z[3] * radius_, z[1] + z[2] * radius_};
+  }
+
+  MathavanState operator()(double p, const MathavanState& z) const {
+    return BothSliding() ? Sliding(p, z) : RatesOf(z, Friction(z));
+  }
+
+  bool BothSliding() const {
+    return (*contact_)[kNose].grip == Grip::kSliding && (*contact_)[kSlate].grip == Grip::kSliding;
+  }
+
+  // The rates while both contacts slide (the common case, written out).
+  MathavanState Sliding(double /*p*/, const MathavanState& z) const {
+    const SlipContact &nose = (*contact_)[kNose], &slate = (*contact_)[kSlate];
+    const double sx = z[0] + z[3] * radius_ * st_ - z[4] * radius_ * ct_ - nose.offset[0];
+    const double sy = -z[1] * st_ + z[2] * radius_ - nose.offset[1];
+    const double cx = z[0] - z[3] * radius_ - slate.offset[0];
+    const double cy = z[1] + z[2] * radius_ - slate.offset[1];
     const double s = std::sqrt(sx * sx + sy * sy), c = std::sqrt(cx * cx + cy * cy);
     // A slip within rounding of zero has no direction of its own: none at the nose (no
     // friction), and at the slate the one the nose's impulse alone gives it. A ball rolling
@@ -228,37 +277,167 @@ class MathavanRates {
     d[2] = -kw_ * (mw_ * sphi + ms_ * sphi2 * load);
     d[3] = -kw_ * (mw_ * cphi * st_ - ms_ * cphi2 * load);
     d[4] = kw_ * (mw_ * cphi * ct_);
-    d[5] = uy * ct_;  // the nose's normal velocity
+    d[5] = z[1] * ct_;  // the nose's normal velocity
+    return d;
+  }
+
+  // The friction at z under the contacts' present grips.
+  MathavanFriction Friction(const MathavanState& z) const {
+    std::array<Eigen::Vector2d, 2> d;
+    for (int j : {kNose, kSlate}) d[j] = Direction(j, z);
+    for (int j : {kNose, kSlate}) {
+      if ((*contact_)[j].grip == Grip::kEdge) d[j] = EdgeDirection(j, z, d);
+    }
+    return Solve(d);
+  }
+
+  // The friction at z were contact j stuck, the other as it is.
+  MathavanFriction Held(int j, const MathavanState& z) const {
+    Contacts held = *contact_;
+    held[j].grip = Grip::kStuck;
+    return MathavanRates(*this, &held).Friction(z);
+  }
+
+  // How far contact j's friction f lies outside its cone (its square less the square of mu
+  // times the load): positive where a stuck contact cannot hold.
+  double Excess(int j, const MathavanFriction& f) const {
+    if (j == kNose) return f[0] * f[0] + f[1] * f[1] - mw_ * mw_;
+    const double limit = ms_ * (st_ - ct_ * f[1]);
+    return f[2] * f[2] + f[3] * f[3] - limit * limit;
+  }
+
+  static Eigen::Vector2d Of(int j, const MathavanFriction& f) {
+    return j == kNose ? f.head<2>() : f.tail<2>();
+  }
+
+  MathavanState RatesOf(const MathavanState& z, const MathavanFriction& f) const {
+    MathavanState d;
+    d[0] = kv_ * (f[0] + f[2]);
+    d[1] = kv_ * (-ct_ - st_ * f[1] + f[3]);
+    d[2] = kw_ * (f[1] + f[3]);
+    d[3] = kw_ * (st_ * f[0] - f[2]);
+    d[4] = -kw_ * ct_ * f[0];
+    d[5] = z[1] * ct_;
     return d;
   }
 
  private:
+  // A sliding contact's direction: its slip's; none within rounding of zero.
+  Eigen::Vector2d Direction(int j, const MathavanState& z) const {
+    const Eigen::Vector2d s = Slip(j, z) - (*contact_)[j].offset;
+    const double n = s.norm();
+    return n > floor_ ? Eigen::Vector2d(s / n) : Eigen::Vector2d::Zero();
+  }
+
+  // The friction given each unstuck contact's direction d[j]; each stuck contact's from its slip
+  // rate held at zero. The slip rates are linear in the friction (K = R kw):
+  //   nose  x: fx (kv + K) + gx (kv - K sin)
+  //   nose  t: kv sin cos + ft (kv sin^2 + K) + gy (K - kv sin)
+  //   slate x: fx (kv - K sin) + gx (kv + K)
+  //   slate y: -kv cos + ft (K - kv sin) + gy (kv + K)
+  MathavanFriction Solve(const std::array<Eigen::Vector2d, 2>& d) const {
+    const double k = kw_ * radius_;
+    Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d b = Eigen::Vector4d::Zero();
+    if ((*contact_)[kNose].grip == Grip::kStuck) {
+      a.row(0) << kv_ + k, 0.0, kv_ - st_ * k, 0.0;
+      a.row(1) << 0.0, kv_ * st_ * st_ + k, 0.0, k - kv_ * st_;
+      b[1] = -kv_ * st_ * ct_;
+    } else {  // f = -mu_w d
+      a(0, 0) = a(1, 1) = 1.0;
+      b[0] = -mw_ * d[kNose][0];
+      b[1] = -mw_ * d[kNose][1];
+    }
+    if ((*contact_)[kSlate].grip == Grip::kStuck) {
+      a.row(2) << kv_ - st_ * k, 0.0, kv_ + k, 0.0;
+      a.row(3) << 0.0, k - kv_ * st_, 0.0, kv_ + k;
+      b[3] = kv_ * ct_;
+    } else {  // g = -mu_s (sin - cos ft) d
+      a(2, 2) = a(3, 3) = 1.0;
+      a(2, 1) = -ms_ * d[kSlate][0] * ct_;
+      a(3, 1) = -ms_ * d[kSlate][1] * ct_;
+      b[2] = -ms_ * d[kSlate][0] * st_;
+      b[3] = -ms_ * d[kSlate][1] * st_;
+    }
+    return a.partialPivLu().solve(b);
+  }
+
+  // The direction u on the cone's edge (friction -mu N u) in which contact j's slip grows along
+  // itself: its rate parallel to u, pointing along it. Secant iterations on the angle from the
+  // direction the held friction's excess points to (the solution as the excess goes to zero),
+  // then from the three quarter-turns off it.
+  Eigen::Vector2d EdgeDirection(int j, const MathavanState& z,
+                                std::array<Eigen::Vector2d, 2> d) const {
+    const Eigen::Vector2d f = Of(j, Held(j, z));
+    const double start = f.norm() > 0.0 ? std::atan2(-f[1], -f[0]) : 0.0;
+    Eigen::Vector2d rate;
+    auto across = [&](double angle) {
+      d[j] = {std::cos(angle), std::sin(angle)};
+      rate = Slip(j, RatesOf(z, Solve(d)));
+      return rate[0] * d[j][1] - rate[1] * d[j][0];
+    };
+    for (double turn : {0.0, 0.5 * kPi, -0.5 * kPi, kPi}) {
+      double a0 = start + turn, a1 = a0 + 1e-6, g0 = across(a0), g1 = across(a1);
+      for (int it = 0; it < 40 && g1 != 0.0 && std::abs(a1 - a0) > 1e-15; ++it) {
+        const double a2 = a1 - g1 * (a1 - a0) / (g1 - g0);
+        if (!std::isfinite(a2)) break;
+        a0 = a1;
+        g0 = g1;
+        a1 = a2;
+        g1 = across(a1);
+      }
+      if (rate.dot(d[j]) >= 0.0) return d[j];
+    }
+    return {std::cos(start), std::sin(start)};
+  }
+
+  const Contacts* contact_;
   double radius_, st_, ct_, mw_, ms_, kv_, kw_, floor_;
 };
 
 }  // namespace
 
-// The impact is smooth in P but where a contact's slip passes through zero, so it is integrated
-// by Dormand and Prince's 5(4) pair under error control (each step's error estimate within
-// kMathavanTolerance of the ball's speed, in velocity and R w), with the phase ends found by
-// Newton's method on the last step's length. Where a slip sticks at zero (the Coulomb friction
-// then flips at every step and no higher order helps) the steps fall to the finest,
-// (1 + e) m v_n / cushion_impulse_steps, taken by the cheaper midpoint rule; the embedded pair
-// is tried again after a number of fine steps that doubles while it keeps failing.
+// The impact is smooth in P between the contacts' switches (a sliding slip landing on zero, to
+// stick there or to leave it at the edge; a stuck or edge contact's held friction crossing its
+// cone; an edge slip grown large enough to slide), so it is integrated between them by Dormand
+// and Prince's 5(4) pair under error control (each step's error estimate within
+// kMathavanTolerance of the ball's speed, in velocity and R w). A sliding slip headed for zero
+// is stepped no further than where its present rate would bring it to zero, so it lands within
+// the tolerance of zero in a few steps instead of crossing it; a cone crossing is found inside
+// its step by false position, a phase end by Newton's method. Should the pair still fail (a
+// slip that creeps toward zero at the edge of sticking turns faster than it can step cheaply),
+// the steps fall to the finest, (1 + e) m v_n / cushion_impulse_steps, taken by the midpoint
+// rule; the pair is tried again after a number of fine steps that doubles while it fails.
 void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, double e,
                             double mu_cushion, double mu_slate, Ball* ball) {
   constexpr double kMathavanTolerance = 1e-8;
+  constexpr int kNose = MathavanRates::kNose, kSlate = MathavanRates::kSlate;
   const PhysicsParams& p = model.params();
   const Eigen::Vector3d ey = -nh, ez = Eigen::Vector3d::UnitZ(), ex = ey.cross(ez);
   const double m = model.mass(), radius = model.radius();
   MathavanState z;
   z << ball->v.dot(ex), ball->v.dot(ey), ball->w.dot(ex), ball->w.dot(ey), ball->w.dot(ez), 0.0;
   const double speed = ball->v.norm() + radius * ball->w.norm();
-  const MathavanRates rates(m, radius, model.cushion_sin(), mu_cushion, mu_slate, 1e-9 * speed);
+  const double slip_floor = 1e-9 * speed;
+  MathavanRates::Contacts contacts;  // both sliding until a slip reaches zero
+  const MathavanRates rates(m, radius, model.cushion_sin(), mu_cushion, mu_slate, slip_floor,
+                            &contacts);
   const double tol = kMathavanTolerance * speed;
+  // An edge contact's slip goes back to its own direction once 100 times the tolerance: small
+  // enough that the edge's direction has not drifted from the slip's (handed back at 1e-4 of
+  // the speed or below, a test impact's rebound stays within 2e-9 of the reference; at 1e-3,
+  // 7e-7), large enough that it does not land again at once.
+  const double hand_off = 1e-6 * speed;
   const double total = (1.0 + e) * m * z[1];  // the frictionless impact's impulse
   const double steps = p.cushion_impulse_steps;
+  // The pair's steps may go down to 1/1000 of the finest step: a small slip turns fast (at a
+  // rate of order mu / |slip|), and a slip that passes close by zero, or creeps toward it, needs
+  // steps of the order of its size. Creeping is slow; after kSmallSteps steps below the finest
+  // the pair goes back to the finest step as its floor, and so to the fallback below it.
+  constexpr int kSmallSteps = 200;
   const double h_min = total / steps, h_max = 0.5 * total;
+  double h_floor = 1e-3 * h_min;
+  int small_steps = 0;
   auto error_of = [radius](const MathavanState& err) {
     return std::max({std::abs(err[0]), std::abs(err[1]), radius * std::abs(err[2]),
                      radius * std::abs(err[3]), radius * std::abs(err[4])});
@@ -273,26 +452,113 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
       return 0.0;
     }
     ode::Dp45Stages<MathavanState> stages;
-    *out = ode::Dp45Solution(rates, 0.0, h, z, k1, &stages, h);
+    if (rates.BothSliding()) {
+      auto sliding = [&rates](double q, const MathavanState& s) { return rates.Sliding(q, s); };
+      *out = ode::Dp45Solution(sliding, 0.0, h, z, k1, &stages, h);
+    } else {
+      *out = ode::Dp45Solution(rates, 0.0, h, z, k1, &stages, h);
+    }
     *k_out = rates(0.0, *out);
     return error_of(ode::Dp45Error(h, k1, stages, *k_out));
   };
+  // Contact j's slip is at zero at s: it sticks if its friction can hold it, and else grips at
+  // the edge (a slate slip that starts at zero keeps sliding: the rates' rounding rule).
+  auto settle = [&](int j, const MathavanState& s, bool start) {
+    SlipContact& c = contacts[j];
+    const bool holds = rates.Excess(j, rates.Held(j, s)) <= 0.0;
+    if (!holds && start && j == kSlate) return;
+    c = {holds ? Grip::kStuck : Grip::kEdge, rates.Slip(j, s)};
+  };
+  for (int j : {kNose, kSlate}) {
+    if (rates.Slip(j, z).norm() <= slip_floor) settle(j, z, true);
+  }
   MathavanState k1 = rates(0.0, z), next, k_next;
+  // The held friction's excess over the cone: it changes sign where a stuck contact comes
+  // unstuck and where an edge contact sticks.
+  auto held_excess = [&](int j, const MathavanState& s) {
+    return rates.Excess(j, rates.Held(j, s));
+  };
+  // The first cone crossing inside the step [0, h] from z: the step is cut to it (`end`,
+  // `k_end` and the error estimate remade there) and the contact returned; -1 if none.
+  auto first_switch = [&](bool fine, double* h, MathavanState* end, MathavanState* k_end,
+                          double* err) {
+    int which = -1;
+    for (int j : {kNose, kSlate}) {
+      const Grip grip = contacts[j].grip;
+      if (grip == Grip::kSliding) continue;
+      // Oriented to rise through zero at the crossing: the excess for a stuck contact, its
+      // negative for an edge one.
+      const double sign = grip == Grip::kStuck ? 1.0 : -1.0;
+      double fb = sign * held_excess(j, *end);
+      if (!(fb > 0.0)) continue;
+      double a = 0.0, b = *h, fa = sign * held_excess(j, z);
+      if (fa > 0.0) b = 0.0;  // already across: the switch is at z
+      MathavanState at_b = b > 0.0 ? *end : z, k_at_b = b > 0.0 ? *k_end : k1;
+      double err_b = b > 0.0 ? *err : 0.0;
+      int side = 0;  // Illinois' false position
+      for (int it = 0; it < 60 && b - a > 1e-15 * total; ++it) {
+        const double x = std::clamp(b - fb * (b - a) / (fb - fa), a, b);
+        const double x_err = step(fine, x, k1, end, k_end);
+        const double fx = sign * held_excess(j, *end);
+        if (fx > 0.0) {
+          b = x;
+          fb = fx;
+          at_b = *end;
+          k_at_b = *k_end;
+          err_b = x_err;
+          if (side == 1) fa *= 0.5;
+          side = 1;
+        } else {
+          a = x;
+          fa = fx;
+          if (side == -1) fb *= 0.5;
+          side = -1;
+        }
+      }
+      *h = b;
+      *end = at_b;
+      *k_end = k_at_b;
+      *err = err_b;
+      which = j;
+    }
+    return which;
+  };
   bool compressing = true, rejected = false;
   double target = 0.0, h = 0.125 * total;
   int fine_left = 0, fine_run = 1;
   // Compression ends where vy falls to 0; restitution where W falls to its target. Each is
   // monotone in P (the nose's normal impulse slows vy; W falls while vy < 0).
   auto phase_end = [&](const MathavanState& s) { return compressing ? s[1] : s[5] - target; };
+  // How far ahead a sliding slip headed for zero would reach it, were its rate steady: no step
+  // goes past that, so the slip lands on zero in a few steps instead of crossing it.
+  auto zero_ahead = [&] {
+    double ahead = std::numeric_limits<double>::infinity();
+    for (int j : {kNose, kSlate}) {
+      const SlipContact& c = contacts[j];
+      if (c.grip != Grip::kSliding) continue;
+      const Eigen::Vector2d s = rates.Slip(j, z) - c.offset;
+      const double n = s.norm(), closing = -rates.Slip(j, k1).dot(s) / n;
+      if (n > slip_floor && closing > 0.0) ahead = std::min(ahead, n / closing);
+    }
+    return ahead;
+  };
+  double ahead = zero_ahead();
   const int cap = 8 * static_cast<int>(steps) + 64;  // guards only: the fine steps alone end it
   for (int k = 0; k < cap; ++k) {
-    const bool fine = fine_left > 0 || h <= h_min;
+    const bool fine = fine_left > 0 || h <= h_floor;
     if (fine) h = h_min;
-    const double err = step(fine, h, k1, &next, &k_next);
+    // The step's length, cut at a sliding slip's zero ahead or at a switch. Once the small steps
+    // are spent the fallback's steps are not cut: a creeping slip would cut them ever shorter.
+    const bool spent = small_steps > kSmallSteps;
+    double taken = fine && spent ? h : std::min(h, ahead);
+    if (taken < h_min && ++small_steps > kSmallSteps) h_floor = h_min;
+    const bool cut = taken < h;
+    double err = step(fine, taken, k1, &next, &k_next);
+    const int switching = first_switch(fine, &taken, &next, &k_next, &err);
     if (!fine && !(err <= tol)) {
-      h = std::max(h_min, h * ode::Dp45StepFactor(err / tol, rejected));
+      h = std::max(h_floor, taken * ode::Dp45StepFactor(err / tol, rejected));
       rejected = true;
-      if (h <= h_min) {  // the pair cannot meet the tolerance above the finest step
+      if (h <= h_floor) {  // the pair cannot meet the tolerance above the finest step
         fine_left = fine_run;
         fine_run = std::min(2 * fine_run, 64);
       }
@@ -301,11 +567,12 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
     if (phase_end(next) <= 0.0) {
       // The phase ends inside this step: Newton's method on the step's length, each iterate a
       // step of the same rule from z (the phase's quantity falls at the rate k_next gives).
-      double hh = h;
+      // A switch later in the step is found again in the next.
+      double hh = taken;
       for (int it = 0; it < 6; ++it) {
         const double slope = compressing ? k_next[1] : k_next[5];
         if (!(slope < 0.0)) break;
-        const double h_new = std::clamp(hh - phase_end(next) / slope, 0.0, h);
+        const double h_new = std::clamp(hh - phase_end(next) / slope, 0.0, taken);
         if (std::abs(h_new - hh) <= 1e-13 * total) break;
         hh = h_new;
         step(fine, hh, k1, &next, &k_next);
@@ -317,13 +584,36 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
       target = (1.0 - e * e) * z[5];
       if (e == 0.0) break;
       rejected = false;
+      ahead = zero_ahead();
       continue;
     }
     z = next;
     k1 = k_next;
+    bool changed = false;
+    if (switching >= 0) {  // a stuck contact comes to the edge; an edge contact sticks
+      SlipContact& c = contacts[switching];
+      c = {c.grip == Grip::kStuck ? Grip::kEdge : Grip::kStuck, rates.Slip(switching, z)};
+      changed = true;
+    }
+    for (int j : {kNose, kSlate}) {
+      SlipContact& c = contacts[j];
+      const Eigen::Vector2d slip = rates.Slip(j, z) - c.offset;
+      const double n = slip.norm();
+      if (c.grip == Grip::kEdge && n > hand_off) {
+        c.grip = Grip::kSliding;
+        changed = true;
+      } else if (c.grip == Grip::kSliding && n <= tol &&
+                 (n <= slip_floor || rates.Slip(j, k1).dot(slip) < 0.0)) {
+        // A slip headed for zero, within the tolerance of it: landed.
+        settle(j, z, false);
+        changed = true;
+      }
+    }
+    if (changed) k1 = rates(0.0, z);
+    ahead = zero_ahead();
     if (fine) {
       if (--fine_left <= 0) h = 2.0 * h_min;
-    } else {
+    } else if (switching < 0 && !cut) {
       fine_run = 1;
       h = std::min(h_max, h * ode::Dp45StepFactor(err / tol, rejected));
     }

@@ -42,9 +42,9 @@ bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
 
 /// Mathavan, Jackson and Parkin's (2010) cushion impact (CushionModel::kMathavan2010) with the
 /// coefficients given: restitution `e` at the nose, sliding friction `mu_cushion` at the nose
-/// and `mu_slate` at the slate, integrated under error control down to the finest step the
-/// table's cushion_impulse_steps sets. `normal` points from the cushion into the table; the ball
-/// must be approaching it. Changes v (horizontal after) and w.
+/// and `mu_slate` at the slate, integrated under error control with a stuck contact held stuck;
+/// the table's cushion_impulse_steps sets the fallback's step. `normal` points from the cushion
+/// into the table; the ball must be approaching it. Changes v (horizontal after) and w.
 void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& normal, double e,
                             double mu_cushion, double mu_slate, Ball* ball);
 

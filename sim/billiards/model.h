@@ -83,8 +83,8 @@ enum class CushionModel : uint8_t {
   /// nose, with sliding friction at the nose (f_cushion_mathavan) and at the slate (mu_slide),
   /// each in the direction of its own slip as it evolves, until the nose's normal work gives
   /// back e_cushion_mathavan^2 of the compression's (an energetic restitution).
-  /// Integrated under error control; cushion_impulse_steps sets the finest step, which decides
-  /// the accuracy where a slip sticks (docs/billiards.md).
+  /// Integrated under error control, a contact whose slip reaches zero held there while its
+  /// friction can; cushion_impulse_steps sets the fallback's step (docs/billiards.md).
   kMathavan2010,
   /// Stronge's compliant contact at Han's nose: the same restitution e_c and normal impulse as
   /// kHan, but the nose is a pair of springs, normal and tangential, whose stiffness ratio is
@@ -113,7 +113,7 @@ struct PhysicsParams {
   double f_cushion = 0.2;              ///< ball-cushion friction coefficient f_c
   double e_cushion_mathavan = 0.98;    ///< kMathavan2010: energetic restitution at the nose
   double f_cushion_mathavan = 0.14;    ///< kMathavan2010: ball-cushion sliding friction
-  double cushion_impulse_steps = 500;  ///< kMathavan2010: finest step, 1/N of a (1+e) m v_n impact
+  double cushion_impulse_steps = 500;  ///< kMathavan2010: fallback step, 1/N of a (1+e) m v_n impact
   double cushion_poisson_ratio = 0.5;  ///< kStrongeCompliant: the cushion rubber's Poisson ratio
   double cushion_height_m = 0.036;     ///< h: cushion nose above the slate (m); R < h < 2R
   double cue_mass_kg = 0.54;           ///< M: cue mass (kg), 19 oz
