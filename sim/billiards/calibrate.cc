@@ -522,11 +522,12 @@ struct Candidate {
 // Draws are seeded: the same recording gives the same fit. StrikeBounds::resample; off by
 // default. Measured with billiards_calibration_study --strike-recovery (docs/billiards.md,
 // "Resampled starts"): fitting random three-cushion shots under their own table, it misses
-// (more than 5 % above the true strike's error) 11 of 120 against 14 with each start alone,
-// for 8-13 % fewer simulations (15 against 30 while the Mathavan cushion's integration was
-// rough, which the starts carried alone suffered from most). Under a wrong model, which every
-// real table's is somewhere, it is no better on the whole shot, and its draws along what the
-// early windows leave flat (the spin) make predictions from a shot's first 0.4 s worse.
+// (more than 5 % above the true strike's error) none of 120 against 2 with each start alone,
+// for 9-15 % fewer simulations (11 against 14, and 15 against 30, under the earlier, rougher
+// integrations of the Mathavan cushion, which the starts carried alone suffered from most).
+// Under a wrong model, which every real table's is somewhere, it is no better on the whole
+// shot, and its draws along what the early windows leave flat (the spin) make predictions
+// from a shot's first 0.4 s worse.
 constexpr double kPruneChi2 = 25.0;
 constexpr size_t kDraws = 2;
 constexpr size_t kMinParents = 5;

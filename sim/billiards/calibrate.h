@@ -118,7 +118,7 @@ struct StrikeBounds {
   bool fit_elevation = false;
   double max_elevation_deg = 30.0;
   /// Resample the fit's starts between its windows (docs/billiards.md, "Resampled starts"):
-  /// with the table's model right, somewhat fewer misses on chaotic shots; under a wrong model
+  /// with the table's model right, fewer misses on chaotic shots; under a wrong model
   /// (every real table) no better on the whole shot and worse at predicting it from its
   /// start, so off by default.
   bool resample = false;

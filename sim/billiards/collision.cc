@@ -430,10 +430,10 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
   const double hand_off = 1e-6 * speed;
   const double total = (1.0 + e) * m * z[1];  // the frictionless impact's impulse
   const double steps = p.cushion_impulse_steps;
-  // The pair's steps may go down to 1/1000 of the finest step: a small slip turns fast (at a
+  // The pair's steps may go down to 1/1000 of the fallback step: a small slip turns fast (at a
   // rate of order mu / |slip|), and a slip that passes close by zero, or creeps toward it, needs
-  // steps of the order of its size. Creeping is slow; after kSmallSteps steps below the finest
-  // the pair goes back to the finest step as its floor, and so to the fallback below it.
+  // steps of the order of its size. Creeping is slow; after kSmallSteps steps shorter than the
+  // fallback step the pair's floor goes back up to it, and so to the fallback below it.
   constexpr int kSmallSteps = 200;
   const double h_min = total / steps, h_max = 0.5 * total;
   double h_floor = 1e-3 * h_min;
@@ -443,7 +443,7 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
                      radius * std::abs(err[3]), radius * std::abs(err[4])});
   };
   // One step of length h from z (k1 its rates): the new state, its rates, the error estimate
-  // (the midpoint rule's is not estimated: it is only taken at the finest step).
+  // (the midpoint rule's is not estimated: it is only the fallback's).
   auto step = [&](bool fine, double h, const MathavanState& k1, MathavanState* out,
                   MathavanState* k_out) {
     if (fine) {
@@ -558,7 +558,7 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
     if (!fine && !(err <= tol)) {
       h = std::max(h_floor, taken * ode::Dp45StepFactor(err / tol, rejected));
       rejected = true;
-      if (h <= h_floor) {  // the pair cannot meet the tolerance above the finest step
+      if (h <= h_floor) {  // the pair cannot meet the tolerance above its floor
         fine_left = fine_run;
         fine_run = std::min(2 * fine_run, 64);
       }
