@@ -14,8 +14,8 @@
 // 0.85, friction 0.2) and with its restitution and friction fitted to the curves (least squares
 // of the angle in radians and the relative speed, on a grid refined twice); Stronge's model at
 // the rubber's Poisson ratio 0.5 and at 0.3. Mathavan's own model at its default fallback step
-// (1/500) shows what that step changes. CPU: the median over 5 passes of the calling thread's CPU per
-// impact.
+// (1/500) shows what that step changes. CPU: the median over 5 passes of the calling thread's
+// CPU per impact.
 //
 // CSV on stdout: model,constants,e,f,angle_rms_deg,angle_max_deg,speed_rms_pct,spin_rms_pct,
 // cpu_ns

@@ -46,8 +46,8 @@ with its preset's constants, its rolling resistance fitted, and calibrated; held
   whose struck ball meets the first three rails the recording shows (read from its track
   alone), in order, with the whole-shot fit / the 0.4 s prediction, calibrated constants.
 - The reference of both is Mathavan et al.'s model, so `mathavan2010` meets it by construction
-  (its rebound error is that of its integration, against its own with a ten times finer
-  finest step); the rows below it say what a cheaper model loses against a cushion measured
+  (its rebound error is that of its integration, against its own with a fallback step ten
+  times finer); the rows below it say what a cheaper model loses against a cushion measured
   in a laboratory. No public recording of a real table is in this table yet.
 """
 
