@@ -48,8 +48,10 @@
 // Usage: billiards_calibration_study [--quick] [--shots N] [--no-synthetic] [--recordings PATH]
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
-//          [--elevation LO:HI] [--fit-elevation] [--resample] [--strike-recovery]
+//          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
+//          [--strike-recovery]
 //
+// --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
 // --resample: every strike fit resamples its starts between windows (StrikeBounds::resample);
 // the synthetic source ends in -resample.
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
@@ -83,6 +85,8 @@ constexpr double kPredictWindow = 0.4;  // s
 // (--fit-elevation).
 double huber_m = 0.0;
 StrikeBounds strike_bounds;
+// The cushion models studied (--model, repeatable; default all three).
+std::vector<std::string> models;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -342,6 +346,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
     const std::string name = cm == CushionModel::kHan            ? "han"
                              : cm == CushionModel::kMathavan2010 ? "mathavan2010"
                                                                  : "stronge";
+    if (!models.empty() && std::find(models.begin(), models.end(), name) == models.end()) continue;
     TableSpec spec = preset;
     spec.params.cushion_model = cm;
     Score(source, name, "preset", spec, test, truth);
@@ -372,6 +377,8 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
                    r.status().ToString().c_str());
       continue;
     }
+    std::fprintf(stderr, "%s %s: calibrated in %lld simulations, %d iterations\n", source.c_str(),
+                 name.c_str(), static_cast<long long>(r->simulations), r->iterations);
     for (const ParamReport& p : r->fitted) {
       std::fprintf(stderr, "%s %s: %s %g -> %g (standard error %.2g%s)\n", source.c_str(),
                    name.c_str(), p.name.c_str(), p.before, p.after, p.standard_error,
@@ -458,6 +465,13 @@ int main(int argc, char** argv) {
       strike_bounds.fit_elevation = true;
     } else if (!std::strcmp(argv[i], "--resample")) {
       strike_bounds.resample = true;
+    } else if (!std::strcmp(argv[i], "--model") && i + 1 < argc) {
+      const std::string m = argv[++i];
+      if (m != "han" && m != "mathavan2010" && m != "stronge") {
+        std::fprintf(stderr, "--model: han, mathavan2010 or stronge\n");
+        return 2;
+      }
+      models.push_back(m);
     } else if (!std::strcmp(argv[i], "--elevation") && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%lf:%lf", &elevation[0], &elevation[1]) != 2 ||
           !(elevation[0] >= 0.0 && elevation[1] >= elevation[0] && elevation[1] <= 30.0)) {
@@ -482,7 +496,7 @@ int main(int argc, char** argv) {
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
-                   "[--fit-elevation] [--resample] [--strike-recovery]\n");
+                   "[--fit-elevation] [--resample] [--model M]... [--strike-recovery]\n");
       return 2;
     }
   }

@@ -166,8 +166,10 @@ struct CalibrationOptions {
   /// the held-out report then also says how well the rest of the shot is predicted. Default:
   /// every point.
   double strike_window_s = 1e300;
-  /// Levenberg-Marquardt iterations of the joint fit (with unknown strike times, a quarter of
-  /// them, at least one of two or more, go to the last solve, which frees the times).
+  /// Levenberg-Marquardt iterations of the joint fit on whole shots (with unknown strike
+  /// times, a quarter of them, at least one of two or more, go to the last solve, which frees
+  /// the times); the fits on the shots' first seconds before it (docs/billiards.md, "Growing
+  /// windows") take up to 10 more a window (up to max_iterations if that is fewer).
   int max_iterations = 60;
   int64_t max_simulations = 2000000;  ///< budget over the whole calibration
   /// Huber's scale (m) for every fit (0: squared distances). A scale a few times the

@@ -484,13 +484,13 @@ TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
   o.progress = [&](double f, std::string_view) { fractions.push_back(f); };
   absl::StatusOr<CalibrationReport> r = Calibrate(Carom(), SolverOptions{}, recs, o);
   ASSERT_TRUE(r.ok()) << r.status();
-  EXPECT_NEAR(r->params.mu_slide, want.params.mu_slide, 0.05 * want.params.mu_slide);
-  EXPECT_NEAR(r->params.mu_roll, want.params.mu_roll, 0.05 * want.params.mu_roll);
+  EXPECT_NEAR(r->params.mu_slide, want.params.mu_slide, 0.01 * want.params.mu_slide);
+  EXPECT_NEAR(r->params.mu_roll, want.params.mu_roll, 0.01 * want.params.mu_roll);
   // The spin-down too (without the fit's restart it stopped at 6.17, in a false valley its
   // carried strikes held it in).
-  EXPECT_NEAR(r->params.spin_decel_rps2, want.params.spin_decel_rps2, 0.05 * want.params.spin_decel_rps2);
-  EXPECT_NEAR(r->params.e_cushion, want.params.e_cushion, 0.02);
-  EXPECT_NEAR(r->params.f_cushion, want.params.f_cushion, 0.02);
+  EXPECT_NEAR(r->params.spin_decel_rps2, want.params.spin_decel_rps2, 0.01 * want.params.spin_decel_rps2);
+  EXPECT_NEAR(r->params.e_cushion, want.params.e_cushion, 0.002);
+  EXPECT_NEAR(r->params.f_cushion, want.params.f_cushion, 0.002);
   // The standard errors say how well the shots determine each constant: every fitted one lies
   // within four of them of the truth, and the spin-down is, relative to its value, the least
   // determined of the five.
@@ -523,6 +523,39 @@ TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
   ASSERT_FALSE(fractions.empty());
   EXPECT_EQ(fractions.back(), 1.0);
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+}
+
+// From a start whose rolling resistance alone is off (pool cloth's 0.01 for a heated cloth's
+// 0.006), four shots give back the cloth's three constants and Mathavan's cushion's two,
+// within 1 % (0.03 % at most as measured), and lie at the noise. Fitted on whole shots from
+// the start, the first Gauss-Newton step traded the rolling resistance for the cushion and the
+// fit stayed in that valley: restitution at its bound (0.99), the cushion's friction 4.8 % and
+// the sliding friction 3.7 % off, the shots 2.1 mm from their tracks.
+TEST(CalibrateTest, GrowingWindowsKeepTheFitInTheTruthsValley) {
+  TableSpec want = Carom();
+  want.params.cushion_model = CushionModel::kMathavan2010;
+  want.params.mu_roll = 0.006;
+  const TableModel truth = *TableModel::Create(want);
+  const std::vector<Recording> recs = Recordings(truth, 4, 1e-3, 59);
+  TableSpec start = want;
+  start.params.mu_roll = Carom().params.mu_roll;
+  CalibrationOptions o;
+  const std::vector<std::pair<std::string, double>> truths = {
+      {"mu_slide", want.params.mu_slide},
+      {"mu_roll", want.params.mu_roll},
+      {"spin_decel_rps2", want.params.spin_decel_rps2},
+      {"e_cushion_mathavan", want.params.e_cushion_mathavan},
+      {"f_cushion_mathavan", want.params.f_cushion_mathavan}};
+  for (const auto& [name, value] : truths) o.params.push_back({.name = name});
+  absl::StatusOr<CalibrationReport> r = Calibrate(start, SolverOptions{}, recs, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_EQ(r->fitted.size(), truths.size());
+  for (size_t c = 0; c < truths.size(); ++c) {
+    const ParamReport& p = r->fitted[c];
+    EXPECT_FALSE(p.at_bound) << p.name;
+    EXPECT_NEAR(p.after, truths[c].second, 0.01 * truths[c].second) << p.name;
+  }
+  EXPECT_LT(r->train_after_m, 1.4e-3);  // the noise alone: 1.25 mm
 }
 
 // A parameter no shot moves (air drag's coefficient, with drag off) has an infinite standard
@@ -680,3 +713,4 @@ TEST(CalibrateTest, StopsAtItsBudgetAndWhenCancelled) {
 
 }  // namespace
 }  // namespace sportsim::billiards
+
