@@ -527,7 +527,7 @@ TEST(CalibrateTest, CalibrationRecoversTheTablesParameters) {
 
 // From a start whose rolling resistance alone is off (pool cloth's 0.01 for a heated cloth's
 // 0.006), four shots give back the cloth's three constants and Mathavan's cushion's two,
-// within 1 % (0.03 % at most as measured), and lie at the noise. Fitted on whole shots from
+// within 1 % (0.04 % at most as measured), and lie at the noise. Fitted on whole shots from
 // the start, the first Gauss-Newton step traded the rolling resistance for the cushion and the
 // fit stayed in that valley: restitution at its bound (0.99), the cushion's friction 4.8 % and
 // the sliding friction 3.7 % off, the shots 2.1 mm from their tracks.
