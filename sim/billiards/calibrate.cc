@@ -1172,12 +1172,10 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       }
       return absl::OkStatus();
     };
-    auto functor = [&] {
-      LmFunctor g(kp, rows);
-      g.residuals = [&](const VectorXd& u, VectorXd* r) { return refit(u, r->data()); };
-      g.jacobian = reduced_jacobian;
-      return g;
-    };
+    // The whole shots' reduced problem (the windows below build their own).
+    LmFunctor f(kp, rows);
+    f.residuals = [&](const VectorXd& u, VectorXd* r) { return refit(u, r->data()); };
+    f.jacobian = reduced_jacobian;
     // Passes: LM on the parameters; then every strike fitted afresh (FitStrike's starts and
     // windows) under the parameters reached, kept where it beats the one carried along (a
     // strike fitted under the starting parameters can sit in another basin, a ball hit on the
@@ -1215,11 +1213,10 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       }
       return changed;
     };
-    auto run_passes = [&](LmFunctor& g, int most, double progress_from,
-                          double progress_to) -> absl::StatusOr<int> {
+    auto run_passes = [&](int most, double progress_from, double progress_to) -> absl::StatusOr<int> {
       int used = 0;
       for (int pass = 0; pass < kPasses && used < most; ++pass) {
-        absl::StatusOr<int> it = Minimize(g, &x, most - used);
+        absl::StatusOr<int> it = Minimize(f, &x, most - used);
         if (!it.ok()) return it.status();
         used += std::max(*it, 1);
         // The strikes as fitted to the parameters reached (the last evaluation may have been
@@ -1232,7 +1229,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
         progress(progress_from + (progress_to - progress_from) * (pass + 1) / kPasses, "fit");
         if (!*changed) break;
         if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
-        g.last_x.resize(0);  // the strikes moved: no cached evaluation holds
+        f.last_x.resize(0);  // the strikes moved: no cached evaluation holds
       }
       return used;
     };
@@ -1288,12 +1285,11 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     }
     set_window(1e300);
     r.resize(rows);
-    LmFunctor f = functor();
     // The held passes' share of the iterations; the rest (at least one of two or more) frees
     // the times.
     const int held_iterations =
         any_clock ? std::max(1, options.max_iterations * 3 / 4) : options.max_iterations;
-    absl::StatusOr<int> held_used = run_passes(f, held_iterations, 0.4, 0.65);
+    absl::StatusOr<int> held_used = run_passes(held_iterations, 0.4, 0.65);
     if (!held_used.ok()) return held_used.status();
     // A restart: every strike fitted afresh under the parameters reached and taken whatever it
     // scores there, then the passes again; kept if they end lower. A strike carried along the
@@ -1320,7 +1316,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       }
       anchor = strikes;
       f.last_x.resize(0);
-      absl::StatusOr<int> restart_used = run_passes(f, held_iterations, 0.65, 0.9);
+      absl::StatusOr<int> restart_used = run_passes(held_iterations, 0.65, 0.9);
       if (!restart_used.ok()) return restart_used.status();
       report.iterations += *restart_used;
       if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
