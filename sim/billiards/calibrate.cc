@@ -1213,17 +1213,21 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       }
       return changed;
     };
+    // The strikes as fitted to the parameters x reached (the last evaluation may have been a
+    // rejected trial's), carried from there on; r their residuals.
+    auto settle = [&]() -> absl::Status {
+      anchor = strikes;
+      if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
+      anchor = strikes;
+      return absl::OkStatus();
+    };
     auto run_passes = [&](int most, double progress_from, double progress_to) -> absl::StatusOr<int> {
       int used = 0;
       for (int pass = 0; pass < kPasses && used < most; ++pass) {
         absl::StatusOr<int> it = Minimize(f, &x, most - used);
         if (!it.ok()) return it.status();
         used += std::max(*it, 1);
-        // The strikes as fitted to the parameters reached (the last evaluation may have been
-        // a rejected trial's).
-        anchor = strikes;
-        if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
-        anchor = strikes;
+        if (absl::Status st = settle(); !st.ok()) return st;
         absl::StatusOr<bool> changed = renew();
         if (!changed.ok()) return changed.status();
         progress(progress_from + (progress_to - progress_from) * (pass + 1) / kPasses, "fit");
@@ -1248,6 +1252,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       longest = std::max(longest, rec.track.back().t_s - origin[static_cast<size_t>(i)]);
     }
     const VectorXd x_start = x;
+    bool first = true;
     for (double w = kFirstParamWindow; w < longest; w *= 2.0) {
       set_window(w);
       if (rows < kp) continue;
@@ -1264,23 +1269,20 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
         j->bottomRows(kp) = kParamPrior * Eigen::MatrixXd::Identity(kp, kp);
         return absl::OkStatus();
       };
-      // On the first window the strikes afresh first: fitted to whole shots under the
+      // On the first window fitted, the strikes afresh first: fitted to whole shots under the
       // starting parameters, a strike takes up some of what they get wrong, and can be off
       // from its start. Then one solve a window, each strike refined from where it was (no
       // fresh fits: at every window they cost more than all the rest).
       r.resize(rows);
-      if (w == kFirstParamWindow) {
+      if (first) {
+        first = false;
         if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
         if (absl::StatusOr<bool> changed = renew(); !changed.ok()) return changed.status();
       }
       absl::StatusOr<int> it = Minimize(g, &x, std::min(kWindowIterations, options.max_iterations));
       if (!it.ok()) return it.status();
       report.iterations += std::max(*it, 1);
-      // The strikes as fitted to the parameters reached (the last evaluation may have been a
-      // rejected trial's).
-      anchor = strikes;
-      if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
-      anchor = strikes;
+      if (absl::Status st = settle(); !st.ok()) return st;
       progress(0.3 + 0.1 * std::min(1.0, w / longest), "fit, first seconds");
     }
     set_window(1e300);
@@ -1339,8 +1341,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
       absl::StatusOr<int> it = Minimize(f, &x, options.max_iterations - *held_used);
       if (!it.ok()) return it.status();
       report.iterations += std::max(*it, 1);
-      anchor = strikes;
-      if (absl::Status st = refit(x, r.data()); !st.ok()) return st;
+      if (absl::Status st = settle(); !st.ok()) return st;
     }
     // The parameters' standard errors at the fit: the reduced Jacobian there, the strikes
     // where the fit left them.
