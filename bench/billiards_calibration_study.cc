@@ -377,8 +377,9 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
                    r.status().ToString().c_str());
       continue;
     }
-    std::fprintf(stderr, "%s %s: calibrated in %lld simulations, %d iterations\n", source.c_str(),
-                 name.c_str(), static_cast<long long>(r->simulations), r->iterations);
+    std::fprintf(stderr, "%s %s: calibrated in %lld simulations, %d iterations, start %d of %d kept\n",
+                 source.c_str(), name.c_str(), static_cast<long long>(r->simulations), r->iterations,
+                 r->start_kept, static_cast<int>(r->start_rms_m.size()));
     for (const ParamReport& p : r->fitted) {
       std::fprintf(stderr, "%s %s: %s %g -> %g (standard error %.2g%s)\n", source.c_str(),
                    name.c_str(), p.name.c_str(), p.before, p.after, p.standard_error,

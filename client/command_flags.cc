@@ -265,7 +265,7 @@ std::vector<CommandSpec> MakeSpecs() {
                           "separated"},
               {"window", "held-out shots' strikes from their first seconds only, (0, 3600] s"},
               {"max_iterations", "Levenberg-Marquardt iterations, [1, 1000] (default 60)"},
-              {"max_simulations", "simulations in all, [1, 1e9] (default 2000000)"},
+              {"max_simulations", "simulations in all, [1, 1e9] (default 5000000)"},
               {"cue_ball", "the struck ball in every file (default: the first to depart from "
                            "its spot)"},
               {"fit_elevation", "fit the cue's elevation too (default level)"},

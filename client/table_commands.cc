@@ -81,7 +81,7 @@ ABSL_FLAG(std::optional<double>, window, std::nullopt,
 ABSL_FLAG(std::optional<int>, max_iterations, std::nullopt,
           "table calibrate: Levenberg-Marquardt iterations, [1, 1000] (default 60)");
 ABSL_FLAG(std::optional<int64_t>, max_simulations, std::nullopt,
-          "table calibrate: simulations in all, [1, 1e9] (default 2000000)");
+          "table calibrate: simulations in all, [1, 1e9] (default 5000000)");
 ABSL_FLAG(std::string, cue_ball, "",
           "table calibrate: the struck ball in every file (default: the first ball to depart "
           "from its spot)");
@@ -875,8 +875,13 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
       std::cout << absl::StrFormat(", held out %.1f -> %.1f mm", 1e3 * rep.heldout_before_m(),
                                    1e3 * rep.heldout_after_m());
     }
-    std::cout << absl::StrFormat("; %d iterations, %d simulations, %.2f s CPU\n", rep.iterations(),
+    std::cout << absl::StrFormat("; %d iterations, %d simulations, %.2f s CPU", rep.iterations(),
                                  rep.simulations(), rep.cpu_s());
+    if (rep.start_rms_m_size() > 1) {
+      std::cout << absl::StrFormat("; start %d of %d kept (%.1f / %.1f mm)", rep.start_kept(),
+                                   rep.start_rms_m_size(), 1e3 * rep.start_rms_m(0), 1e3 * rep.start_rms_m(1));
+    }
+    std::cout << "\n";
     std::string flags;
     for (const v1::FittedParameter& p : rep.fitted()) {
       flags += absl::StrFormat(" --param %s=%.6g", p.name(), p.after());

@@ -260,6 +260,8 @@ void CalibrationReportToProto(const CalibrationJob& job, const b::CalibrationRep
   out->set_heldout_after_m(report.heldout_after_m);
   out->set_iterations(static_cast<uint32_t>(report.iterations));
   out->set_simulations(report.simulations);
+  for (double d : report.start_rms_m) out->add_start_rms_m(d);
+  out->set_start_kept(static_cast<uint32_t>(report.start_kept));
 }
 
 }  // namespace sportsim::server

@@ -166,12 +166,13 @@ struct CalibrationOptions {
   /// the held-out report then also says how well the rest of the shot is predicted. Default:
   /// every point.
   double strike_window_s = 1e300;
-  /// Levenberg-Marquardt iterations of the joint fit on whole shots (with unknown strike
-  /// times, a quarter of them, at least one of two or more, go to the last solve, which frees
-  /// the times); the fits on the shots' first seconds before it (docs/billiards.md, "Growing
-  /// windows") take up to 10 more a window (up to max_iterations if that is fewer).
+  /// Levenberg-Marquardt iterations of the joint fit on whole shots, each start's (with
+  /// unknown strike times, a quarter of them, at least one of two or more, go to the last
+  /// solve, which frees the times); the fits on the shots' first seconds before the first
+  /// start's (docs/billiards.md, "Growing windows", "Two starts") take up to 10 more a window
+  /// (up to max_iterations if that is fewer).
   int max_iterations = 60;
-  int64_t max_simulations = 2000000;  ///< budget over the whole calibration
+  int64_t max_simulations = 5000000;  ///< budget over the whole calibration
   /// Huber's scale (m) for every fit (0: squared distances). A scale a few times the
   /// tracker's noise and below the model's error (2 cm, say) makes the fit robust to false
   /// detections; the reports' distances are the plain ones either way.
@@ -216,6 +217,13 @@ struct CalibrationReport {
   double heldout_before_m = 0.0, heldout_after_m = 0.0;  ///< 0 when nothing is held out
   int iterations = 0;                ///< joint fit iterations
   int64_t simulations = 0;
+  /// The joint fit's starts, each one's loss at its end as a distance (m): the root of the
+  /// training shots' mean squared distances (under Huber's loss, its squares) averaged over
+  /// the shots. The first, growing windows (docs/billiards.md); the second, the fit over
+  /// whole shots from the starting parameters, when the first ended above the trackers'
+  /// noise ("Two starts"). Empty when nothing was fitted jointly (strikes alone).
+  std::vector<double> start_rms_m;
+  int start_kept = 0;  ///< the start whose fit was kept (1 or 2; 0 with no joint fit)
 };
 
 /// Checks a calibration's inputs as Calibrate does before any work (the model, the solver,

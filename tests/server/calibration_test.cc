@@ -140,6 +140,12 @@ class CalibrationTest : public ::testing::Test {
     EXPECT_EQ(offline->fitted[0].at_bound, rep.fitted(0).at_bound());
     EXPECT_EQ(offline->simulations, rep.simulations());
     EXPECT_EQ(offline->shots[1].after.mean_m, rep.shots(1).after().mean_m());
+    ASSERT_EQ(static_cast<int>(offline->start_rms_m.size()), rep.start_rms_m_size());
+    for (int k = 0; k < rep.start_rms_m_size(); ++k) {
+      EXPECT_EQ(offline->start_rms_m[static_cast<size_t>(k)], rep.start_rms_m(k));
+    }
+    EXPECT_EQ(offline->start_kept, static_cast<int>(rep.start_kept()));
+    EXPECT_EQ(rep.start_kept(), 1u);  // one constant: one start
   }
 
   // Runs an upload of `parts` to its end: the messages and the status.
