@@ -164,13 +164,27 @@ class Budget {
       return absl::ResourceExhaustedError(
           absl::StrFormat("max_simulations: the calibration needs more than %d simulations", max_));
     }
+    if (used_ > share_) {
+      over_share_ = true;
+      return absl::ResourceExhaustedError("max_simulations: past the share of it given");
+    }
     return absl::OkStatus();
   }
   int64_t used() const { return used_; }
+  // A part of the work that may stop short (the second start) runs with a share of the budget:
+  // Take fails past `until` simulations in all, and over_share says so.
+  void Share(int64_t until) {
+    share_ = until;
+    over_share_ = false;
+  }
+  void Unshare() { share_ = std::numeric_limits<int64_t>::max(); }
+  bool over_share() const { return over_share_; }
 
  private:
   int64_t max_;
   int64_t used_ = 0;
+  int64_t share_ = std::numeric_limits<int64_t>::max();
+  bool over_share_ = false;
   const std::function<bool()>* cancelled_;
 };
 
@@ -1077,6 +1091,8 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     sr.before = *e;
     progress(0.3 * (i + 1) / shots, "strikes before");
   }
+  // What fitting every strike once cost: the reserve the second start leaves for what follows.
+  const int64_t first_strikes = budget.used();
 
   // 2. The fit over the training shots by variable projection: LM over the table's parameters
   // alone, each evaluation refitting every unknown strike to them first (from where it was),
@@ -1372,7 +1388,10 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     // distance within 1.5 times the noise's, 2 s^2 for a noise s in each coordinate,
     // estimated from the tracks alone: the truth's is within a few percent of it) cannot be
     // bettered, and is spared it. One parameter's fits are spared it too (one valley, as the
-    // restart).
+    // restart). The second start may stop short: it runs on the budget less a reserve for
+    // what follows it (the first strikes' cost, at least a tenth of the budget), and where it
+    // runs out the first start stands (the second's loss reported as infinity), so a budget
+    // the first start and the rest fit in is not exhausted by the second.
     if (kp >= 2) {
       if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
       const double loss_first = r.squaredNorm();
@@ -1387,14 +1406,20 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
         const int used_first = *held_used;
         x = x_start;
         strikes = anchor = strikes_start;
-        if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
+        budget.Share(options.max_simulations - std::max(first_strikes, options.max_simulations / 10));
+        absl::Status second = all_residuals(x, r.data());
         f.last_x.resize(0);
-        held_used = descend(0.65, 0.9);
-        if (!held_used.ok()) return held_used.status();
-        report.start_rms_m.push_back(std::sqrt(r.squaredNorm() / train_shots));
+        if (second.ok()) {
+          held_used = descend(0.65, 0.9);
+          second = held_used.status();
+        }
+        budget.Unshare();
+        if (!second.ok() && !budget.over_share()) return second;
+        report.start_rms_m.push_back(second.ok() ? std::sqrt(r.squaredNorm() / train_shots)
+                                                 : std::numeric_limits<double>::infinity());
         // The start not kept has its passes counted here, the kept one's below.
-        if (!(r.squaredNorm() < loss_first)) {
-          report.iterations += *held_used;
+        if (!second.ok() || !(r.squaredNorm() < loss_first)) {
+          if (second.ok()) report.iterations += *held_used;
           x = x_first;
           strikes = anchor = strikes_first;
           held_used = used_first;

@@ -221,7 +221,9 @@ struct CalibrationReport {
   /// training shots' mean squared distances (under Huber's loss, its squares) averaged over
   /// the shots. The first, growing windows (docs/billiards.md); the second, the fit over
   /// whole shots from the starting parameters, when the first ended above the trackers'
-  /// noise ("Two starts"). Empty when nothing was fitted jointly (strikes alone).
+  /// noise ("Two starts"): infinity where it ran out of its share of the budget (the
+  /// budget less a reserve for what follows), and the first stood. Empty when nothing was
+  /// fitted jointly (strikes alone).
   std::vector<double> start_rms_m;
   int start_kept = 0;  ///< the start whose fit was kept (1 or 2; 0 with no joint fit)
 };

@@ -596,6 +596,19 @@ TEST(CalibrateTest, ASecondStartRunsAboveTheNoiseAndTheLowerLossIsKept) {
   double squares = 0.0;
   for (const ShotReport& s : r->shots) squares += s.after.rms_m * s.after.rms_m;
   EXPECT_NEAR(std::sqrt(squares / 3.0), r->start_rms_m[static_cast<size_t>(r->start_kept - 1)], 1e-9);
+  // On a budget the second start does not fit in (beside a reserve for what follows it), it
+  // stops short and the first stands: the calibration ends within the budget.
+  o.max_simulations = 120000;  // the two starts took 171,917 as measured
+  absl::StatusOr<CalibrationReport> capped = Calibrate(start, SolverOptions{}, recs, o);
+  ASSERT_TRUE(capped.ok()) << capped.status();
+  ASSERT_EQ(capped->start_rms_m.size(), 2u);
+  EXPECT_EQ(capped->start_rms_m[0], r->start_rms_m[0]);
+  EXPECT_TRUE(std::isinf(capped->start_rms_m[1]));
+  EXPECT_EQ(capped->start_kept, 1);
+  EXPECT_LE(capped->simulations, 120000);
+  squares = 0.0;  // the first start's constants and strikes, restored
+  for (const ShotReport& s : capped->shots) squares += s.after.rms_m * s.after.rms_m;
+  EXPECT_NEAR(std::sqrt(squares / 3.0), capped->start_rms_m[0], 1e-9);
 }
 
 // A parameter no shot moves (air drag's coefficient, with drag off) has an infinite standard
