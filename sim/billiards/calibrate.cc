@@ -1393,8 +1393,7 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
     // runs out the first start stands (the second's loss reported as infinity), so a budget
     // the first start and the rest fit in is not exhausted by the second.
     if (kp >= 2) {
-      if (absl::Status st = all_residuals(x, r.data()); !st.ok()) return st;
-      const double loss_first = r.squaredNorm();
+      const double loss_first = r.squaredNorm();  // descend left r at x
       double at_noise = 0.0;
       for (int i : train) {
         const double s = RecordingNoise(recordings[static_cast<size_t>(i)]);
