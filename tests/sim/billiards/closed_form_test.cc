@@ -619,6 +619,199 @@ TEST_P(ClosedFormTest, StunCutThrow) {
   }
 }
 
+
+// --- Case 7, continued: throw with spin (TP A-14's analysis with follow, draw and english). ----
+//
+// With the cue ball's spin w = (0, w_y, w_z) at contact (w_y > 0 is follow along +x, w_z > 0
+// counter-clockwise seen from above) its contact point R n slips past the object ball's along
+// the tangent t = (sin alpha, cos alpha) at u_t = v sin(alpha) + R w_z, and vertically at
+// u_z = -R w_y cos(alpha). Friction acts against the whole slip s = |(u_t, u_z)|, sized
+// min(mu(s) J_n, m s / 7); its vertical part goes into the slate, so the object ball leaves
+// the line of centres towards t by atan(min(mu(s), 2 s / (7 (1 + e) v cos(alpha))) u_t / s).
+// Follow or draw adds slip across the tangent and so takes the throw down (the friction turns
+// out of the table's plane); english against the cut's slip, "gearing" outside english
+// (R w_z = -v sin(alpha)), takes it to nothing; english with it (inside) adds to it.
+double SpinThrowDeg(const PhysicsParams& p, double alpha, double v, double w_y, double w_z) {
+  const double u_t = v * std::sin(alpha) + p.ball_radius_m * w_z;
+  const double u_z = -p.ball_radius_m * w_y * std::cos(alpha);
+  const double s = std::hypot(u_t, u_z);
+  if (s == 0.0) return 0.0;
+  const double mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * s);
+  const double ratio = std::min(mu, 2.0 * s / (7.0 * (1.0 + p.e_ball) * v * std::cos(alpha)));
+  return RadToDeg(std::atan(ratio * u_t / s));
+}
+
+// The object ball's departure from the line of centres (deg, > 0 towards the tangent) when the
+// cue ball meets it at cut alpha touching, with velocity (v, 0, 0) and spin w.
+double EngineThrowDeg(const TableModel& model, const SolverOptions& options, double alpha,
+                      double v, const Eigen::Vector3d& w) {
+  const TableState start = CutShot(model, alpha, 0.0, {v, 0.0, 0.0}, w);
+  std::vector<Event> events;
+  AdvanceTo(model, options, start, 0.01, &events);
+  const Event* hit = FindBallBall(events, 0, 1);
+  EXPECT_NE(hit, nullptr);
+  if (hit == nullptr) return std::nan("");
+  return RadToDeg(AngleFromTo(Eigen::Vector2d(std::cos(alpha), -std::sin(alpha)), hit->vb));
+}
+
+TEST_P(ClosedFormTest, FollowAndDrawTakeTheThrowDown) {
+  const TableModel model = MakeModel("unbounded");
+  const PhysicsParams& p = model.params();
+  const double radius = model.radius();
+  // 1, 3 and 7 mph: Alciatore's slow, medium and fast shots.
+  for (double v : {0.447, 1.341, 3.129}) {
+    for (double alpha_deg : {10.0, 30.0, 45.0, 60.0}) {
+      SCOPED_TRACE(testing::Message() << v << " m/s, cut " << alpha_deg << " deg");
+      const double alpha = DegToRad(alpha_deg);
+      const double stun = EngineThrowDeg(model, Options(), alpha, v, Eigen::Vector3d::Zero());
+      // Natural roll (w_y = v / R), and as much draw.
+      for (double w_y : {v / radius, -v / radius}) {
+        const double got = EngineThrowDeg(model, Options(), alpha, v, {0.0, w_y, 0.0});
+        EXPECT_NEAR(got, SpinThrowDeg(p, alpha, v, w_y, 0.0), RadToDeg(kAngleTolRad));
+        // Follow and draw throw alike (the slip's vertical part only changes its sign) and
+        // less than stun: the friction's share along the tangent is u_t / s < 1.
+        EXPECT_GT(got, 0.0);
+        EXPECT_LT(got, stun);
+      }
+    }
+  }
+}
+
+// The friction's vertical part turns the object ball too, the other way from the cue ball's
+// follow or draw (as meshed gears): a rolling cue ball gives it a little draw, a drawing one a
+// little follow. While it slides that changes its speed along the line of centres and not
+// across it, so the path it rolls on is thrown more after follow and less after draw, though
+// both leave at the same angle. Its rolling velocity is v - 2/7 u (u its cloth contact's slip),
+// from the impulses: v = (J_n n + J_t t) / m, w = (R / I) n x (-J) for the friction J on it.
+TEST_P(ClosedFormTest, SpinTransferTurnsTheThrownPath) {
+  const TableModel model = MakeModel("unbounded");
+  const PhysicsParams& p = model.params();
+  const double radius = model.radius();
+  const double v = 0.447, alpha = DegToRad(30.0);
+  const Eigen::Vector3d n(std::cos(alpha), -std::sin(alpha), 0.0);
+  const Eigen::Vector3d t(std::sin(alpha), std::cos(alpha), 0.0);
+  double rolled[2];
+  for (int k = 0; k < 2; ++k) {
+    const double w_y = (k == 0 ? 1.0 : -1.0) * v / radius;
+    SCOPED_TRACE(k == 0 ? "follow" : "draw");
+    const TableState start = CutShot(model, alpha, 0.0, {v, 0.0, 0.0}, {0.0, w_y, 0.0});
+    std::vector<Event> events;
+    AdvanceTo(model, Options(), start, 1.0, &events);
+    const Event* hit = FindBallBall(events, 0, 1);
+    ASSERT_NE(hit, nullptr);
+    const Event* rolls = FindTransition(events, 1, MotionState::kSliding, MotionState::kRolling);
+    ASSERT_NE(rolls, nullptr);
+    // The closed form: the slip at the contact, the impulses, the object ball's slide to roll.
+    const Eigen::Vector3d u(v * std::sin(alpha), 0.0, -radius * w_y * std::cos(alpha));  // (t, -, z)
+    const double slip = std::hypot(u.x(), u.z());
+    const double jn = (1.0 + p.e_ball) * 0.5 * v * std::cos(alpha);  // per unit mass
+    const double mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * slip);
+    const double jf = std::min(mu * jn, slip / 7.0);
+    const Eigen::Vector3d friction_on_b = jf / slip * (u.x() * t + u.z() * Eigen::Vector3d::UnitZ());
+    const Eigen::Vector3d vb = jn * n + friction_on_b.x() * Eigen::Vector3d::UnitX() +
+                               friction_on_b.y() * Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d wb = (radius * model.mass() / model.inertia()) * (-n).cross(friction_on_b);
+    const Eigen::Vector3d ub = vb + wb.cross(-radius * Eigen::Vector3d::UnitZ());
+    const Eigen::Vector3d expected = vb - 2.0 / 7.0 * ub;
+    EXPECT_NEAR((rolls->va - expected.head<2>()).norm(), 0.0, kVelTolMps);
+    rolled[k] = RadToDeg(AngleFromTo(n.head<2>(), rolls->va));
+    EXPECT_NEAR(RadToDeg(AngleFromTo(n.head<2>(), hit->vb)), SpinThrowDeg(p, alpha, v, w_y, 0.0),
+                RadToDeg(kAngleTolRad));
+    if (k == 0) {
+      EXPECT_GT(rolled[k], RadToDeg(AngleFromTo(n.head<2>(), hit->vb)));
+    } else {
+      EXPECT_LT(rolled[k], RadToDeg(AngleFromTo(n.head<2>(), hit->vb)));
+    }
+  }
+  EXPECT_GT(rolled[0] - rolled[1], 0.2);  // 2.34 against 2.05 deg
+}
+
+TEST_P(ClosedFormTest, EnglishThrowsAndGearingEnglishThrowsNothing) {
+  const TableModel model = MakeModel("unbounded");
+  const PhysicsParams& p = model.params();
+  const double radius = model.radius();
+  const double v = 1.341;
+  for (double alpha_deg : {0.0, 15.0, 30.0, 45.0, 60.0}) {
+    SCOPED_TRACE(testing::Message() << "cut " << alpha_deg << " deg");
+    const double alpha = DegToRad(alpha_deg);
+    const double gearing = -v * std::sin(alpha) / radius;
+    // Half of the most english a cue gives (tip offset R/4: R w_z = 5/2 (1/4) v), each way,
+    // and the gearing amount, on a stun and on a rolling cue ball.
+    for (double w_z : {0.625 * v / radius, -0.625 * v / radius, gearing}) {
+      for (double w_y : {0.0, v / radius}) {
+        const double got = EngineThrowDeg(model, Options(), alpha, v, {0.0, w_y, w_z});
+        EXPECT_NEAR(got, SpinThrowDeg(p, alpha, v, w_y, w_z), RadToDeg(kAngleTolRad))
+            << "w_y " << w_y << ", w_z " << w_z;
+        if (w_z == gearing) {
+          EXPECT_NEAR(got, 0.0, RadToDeg(kAngleTolRad));
+        }
+      }
+    }
+    if (alpha_deg > 0.0) {
+      // Outside english short of gearing throws the same way as none, past it the other way.
+      // (Short of it, the throw can be more than none's: less slip, but the friction is higher
+      // at a slower slip. At a 60 degree cut half the gearing amount throws 3.9 deg, none 2.3.)
+      const double none = EngineThrowDeg(model, Options(), alpha, v, Eigen::Vector3d::Zero());
+      const double short_of = EngineThrowDeg(model, Options(), alpha, v, {0.0, 0.0, 0.5 * gearing});
+      const double past = EngineThrowDeg(model, Options(), alpha, v, {0.0, 0.0, 2.0 * gearing});
+      EXPECT_GT(none, 0.0);
+      EXPECT_GT(short_of, 0.0);
+      EXPECT_LT(past, 0.0);
+      if (alpha_deg == 60.0) {
+        EXPECT_GT(short_of, none);
+      }
+    } else {
+      // A straight hit with english throws the object ball away from the english's side: right
+      // english (w_z > 0 here turns the contact point towards +t) throws it towards +t.
+      EXPECT_GT(EngineThrowDeg(model, Options(), alpha, v, {0.0, 0.0, 0.625 * v / radius}), 0.0);
+    }
+  }
+}
+
+// Alciatore's summary of his throw analysis ("Throw - Part XI", Billiards Digest, 2007): the
+// most throw without english is at slow speed and about a half-ball hit (a 30 degree cut), and
+// under typical conditions throw reaches about 5 degrees (an inch a foot); the most throw from
+// english on a straight hit is at slow speed with about half the most english. The engine's
+// friction law and impulse put the maxima there, on a stun cue ball.
+TEST(ThrowFormulaTest, MaximaWhereAlciatoreFindsThem) {
+  const TableModel model = MakeModel("unbounded");
+  const double radius = model.radius();
+  const SolverOptions event{.engine = Engine::kEvent};
+  const Eigen::Vector3d stun = Eigen::Vector3d::Zero();
+  double best_cut = 0.0, best_cut_deg = 0.0;
+  for (double cut_deg = 1.0; cut_deg <= 89.0; cut_deg += 1.0) {
+    const double t = EngineThrowDeg(model, event, DegToRad(cut_deg), 0.447, stun);
+    if (t > best_cut) {
+      best_cut = t;
+      best_cut_deg = cut_deg;
+    }
+  }
+  EXPECT_NEAR(best_cut_deg, 30.0, 5.0);  // "about a half-ball hit"
+  EXPECT_NEAR(best_cut, 5.0, 0.5);        // "about 5 degrees"
+  // Faster shots throw less (the friction falls with the slip speed), but for thin slips that
+  // friction stops at every speed: there the throw is the no-slip cap's, the same at any speed.
+  for (double cut_deg : {15.0, 30.0, 45.0, 60.0}) {
+    const double slow = EngineThrowDeg(model, event, DegToRad(cut_deg), 0.447, stun);
+    const double fast = EngineThrowDeg(model, event, DegToRad(cut_deg), 3.129, stun);
+    if (cut_deg == 15.0) {
+      EXPECT_NEAR(slow, fast, RadToDeg(kAngleTolRad));
+    } else {
+      EXPECT_GT(slow, fast);
+    }
+  }
+  // English on a straight hit: tip offset a gives R w_z = 5/2 a v; the most english a cue gives
+  // is a = 1/2 (the miscue limit).
+  double best_side = 0.0, best_a = 0.0;
+  for (double a = 0.01; a <= 0.5; a += 0.01) {
+    const double t = EngineThrowDeg(model, event, 0.0, 0.447, {0.0, 0.0, 2.5 * a * 0.447 / radius});
+    if (t > best_side) {
+      best_side = t;
+      best_a = a;
+    }
+  }
+  EXPECT_NEAR(best_a / 0.5, 0.5, 0.1);  // "about 50% sidespin"
+}
+
 // --- Case 8: energy and momentum. -----------------------------------------------------------
 
 TEST_P(ClosedFormTest, SlideToRollLosesTwoSeventhsOfTheEnergy) {
