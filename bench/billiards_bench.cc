@@ -171,7 +171,8 @@ BENCHMARK(BM_RackShots)->Arg(0)->Arg(1)->Arg(2)->Arg(3)->Unit(benchmark::kMillis
 // One impact per iteration, cycling through 256 approaches on the pool-9ft nose. range(0): the
 // CushionModel; range(1): the approaches, 0 random (0.05-3 m/s into the rail, up to 3 m/s along
 // it, every spin component up to 150 rad/s), 1 rolling balls at 0.2-3.8 m/s from any heading
-// into the rail, with side spin up to 100 rad/s (the common impact in play).
+// into the rail, with side spin up to 100 rad/s (the common impact in play), 2 stun or rolling
+// balls at 10-90 deg to the rail (the cushion study's kind, where many nose slips stick).
 void BM_CushionImpact(benchmark::State& state) {
   TableSpec spec = *MakeTablePreset("pool-9ft");
   spec.params.cushion_model = static_cast<CushionModel>(state.range(0));
@@ -183,9 +184,22 @@ void BM_CushionImpact(benchmark::State& state) {
                  (rolling ? ", rolling" : ", random"));
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const bool square = state.range(1) == 2;
+  if (square) state.SetLabel(std::string(state.range(0) == 0   ? "han"
+                                         : state.range(0) == 2 ? "mathavan2010"
+                                                               : "stronge") +
+                             ", stun or rolling, 10-90 deg");
   std::vector<Ball> balls(256);
   for (Ball& b : balls) {
-    if (rolling) {
+    if (square) {
+      // The cushion study's kind of approach: stun or natural roll, 10-90 deg to the rail at
+      // 0.5-2.5 m/s, side spin of up to half the speed's worth each way; many nose slips stick.
+      const double speed = 1.5 + u(rng), angle = 0.5 * kPi + 0.5 * kPi * 8.0 / 9.0 * u(rng);
+      b.v = {speed * std::cos(angle), speed * std::sin(angle), 0.0};
+      b.w = Eigen::Vector3d::Zero();
+      if (u(rng) > 0.0) b.w = Eigen::Vector3d::UnitZ().cross(b.v) / model.radius();
+      b.w.z() = 0.5 * u(rng) * speed / model.radius();
+    } else if (rolling) {
       const double speed = 2.0 + 1.8 * u(rng), heading = 0.5 * kPi + 1.45 * u(rng);
       b.v = {speed * std::cos(heading), speed * std::sin(heading), 0.0};
       b.w = Eigen::Vector3d::UnitZ().cross(b.v) / model.radius();
@@ -208,7 +222,7 @@ BENCHMARK(BM_CushionImpact)
     ->ArgsProduct({{static_cast<int>(CushionModel::kHan),
                     static_cast<int>(CushionModel::kStrongeCompliant),
                     static_cast<int>(CushionModel::kMathavan2010)},
-                   {0, 1}})
+                   {0, 1, 2}})
     ->Unit(benchmark::kNanosecond);
 
 }  // namespace
