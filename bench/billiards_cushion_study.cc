@@ -11,7 +11,7 @@
 // not fitted).
 //
 // Each of Han's and Stronge's models is scored with the snooker preset's constants (restitution
-// 0.85, friction 0.2) and with its restitution and friction fitted to the curves (least squares
+// 0.924, friction 0.2) and with its restitution and friction fitted to the curves (least squares
 // of the angle in radians and the relative speed, on a grid refined twice); Stronge's model at
 // the rubber's Poisson ratio 0.5 and at 0.3. Mathavan's own model at its default fallback step
 // (1/500) shows what that step changes. CPU: the median over 5 passes of the calling thread's

@@ -1065,7 +1065,9 @@ TEST_F(GamesTest, ThreeCushionMatchPlayedToTheEnd) {
 // The engine can leave a ball at rest in a pocket's mouth, between the jaws and outside the
 // capture circle, beyond the cushion-nose box. Found by SnookerMatchPlayedToTheEnd (frame 2,
 // shot 12): the layout check once refused such a table, so every later shot was refused and
-// the match was stuck. The ball stays where it rests, and the next seat plays.
+// the match was stuck. The ball stays where it rests, and the next seat plays. (Since the
+// snooker preset took a measured table's cloth and cushion, the shot that leaves the black in
+// the corner's mouth is 2.1324 m/s, not 2.1574: found by scanning speeds around it.)
 TEST_F(GamesTest, ABallRestingInAPocketMouthLeavesTheTablePlayable) {
   const std::vector<Placed> balls = {
       {"cue", 1.1008095983422446, -0.071330023524710864},
@@ -1089,7 +1091,7 @@ TEST_F(GamesTest, ABallRestingInAPocketMouthLeavesTheTablePlayable) {
   TableHandle t = MustCreate(GameRequest("snooker", 1, "in-play", balls));
   ASSERT_FALSE(t.id.empty());
   v1::CueStrike strike;
-  strike.set_ball_speed_mps(2.1573714343273949);
+  strike.set_ball_speed_mps(2.132371434327395);
   strike.set_phi_deg(3.679609631955445);
   v1::ShootResponse resp;
   ASSERT_TRUE(api_->Shoot(t.id, t.tokens[0], strike, nullptr, &resp).ok());

@@ -1469,8 +1469,47 @@ TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
     EXPECT_GE(p.e_ball, 0.92);
     EXPECT_LE(p.e_ball, 0.98);
     EXPECT_GE(p.e_cushion, 0.6);
-    EXPECT_LE(p.e_cushion, 0.9);
+    // The snooker preset's cushion is a measured table's (below), livelier than the FAQ's.
+    EXPECT_LE(p.e_cushion, s.preset == "snooker" ? 0.95 : 0.9);
   }
+}
+
+// The snooker preset is the table Mathavan, Jackson and Parkin measured (Am. J. Phys. 77 (2009)
+// 788, Figs. 6 and 9): rolling balls slowed at 0.124-0.126 m/s^2, sliding ones at 1.75-2.40;
+// rolling balls driven square into a cushion at 0.28-3.5 m/s rebounded at v_out = -0.0877 v^2
+// + 1.131 v - 0.0953 (their fit to 31 shots). Han's rigid cushion rebounds at one ratio at
+// every speed, the measured one at 0.79-0.95 of the approach; at its best (the preset's
+// restitution) it stays within 6 % RMS over the range, and within 12 % everywhere (the worst at
+// 0.3 m/s, the end of the measured range). The FAQ's typical restitution, 0.85, is 9.9 % off.
+TEST(PresetTest, SnookerIsAMeasuredSnookerTable) {
+  const TableModel model = MakeModel("snooker");
+  const PhysicsParams& p = model.params();
+  EXPECT_GE(p.mu_roll * p.gravity_mps2, 0.124);
+  EXPECT_LE(p.mu_roll * p.gravity_mps2, 0.126);
+  EXPECT_GE(p.mu_slide * p.gravity_mps2, 1.75);
+  EXPECT_LE(p.mu_slide * p.gravity_mps2, 2.40);
+  auto rms_off = [](const TableModel& m) {
+    double sum = 0.0, worst = 0.0;
+    int n = 0;
+    for (int k = 3; k <= 35; ++k) {
+      const double v_in = 0.1 * k;
+      Ball b = MakeBall(m, "cue", {0.0, 0.0}, {0.0, v_in, 0.0},
+                        RollingSpin({0.0, v_in, 0.0}, m.radius()));
+      CollideCushion(m, Eigen::Vector2d(0.0, -1.0), &b);
+      const double d = b.v.norm() / (-0.0877 * v_in * v_in + 1.131 * v_in - 0.0953) - 1.0;
+      sum += d * d;
+      worst = std::max(worst, std::abs(d));
+      ++n;
+    }
+    return std::make_pair(std::sqrt(sum / n), worst);
+  };
+  const auto [rms, worst] = rms_off(model);
+  EXPECT_LT(rms, 0.06);
+  EXPECT_LT(worst, 0.125);
+  EXPECT_GT(rms_off(MakeModel("snooker", {{"e_cushion", 0.85}})).first, 0.09);
+  // The best restitution: a hundredth either way fits worse.
+  EXPECT_GT(rms_off(MakeModel("snooker", {{"e_cushion", p.e_cushion - 0.01}})).first, rms);
+  EXPECT_GT(rms_off(MakeModel("snooker", {{"e_cushion", p.e_cushion + 0.01}})).first, rms);
 }
 
 // --- The chapter's demonstration scene. -----------------------------------------------------
