@@ -335,31 +335,46 @@ class MathavanRates {
   //   nose  t: kv sin cos + ft (kv sin^2 + K) + gy (K - kv sin)
   //   slate x: fx (kv - K sin) + gx (kv + K)
   //   slate y: -kv cos + ft (K - kv sin) + gy (kv + K)
+  // An unstuck nose's friction is -mu_w d; an unstuck slate's, g = -mu_s (sin - cos ft) d, is
+  // linear in the nose's ft. So the x rows (fx, gx) and the tangential rows (ft, gy) decouple,
+  // and each case is a scalar or a 2x2 solve, written out (a quarter of a sticking impact's
+  // time went to a general 4x4 LU).
   MathavanFriction Solve(const std::array<Eigen::Vector2d, 2>& d) const {
     const double k = kw_ * radius_;
-    Eigen::Matrix4d a = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d b = Eigen::Vector4d::Zero();
-    if ((*contact_)[kNose].grip == Grip::kStuck) {
-      a.row(0) << kv_ + k, 0.0, kv_ - st_ * k, 0.0;
-      a.row(1) << 0.0, kv_ * st_ * st_ + k, 0.0, k - kv_ * st_;
-      b[1] = -kv_ * st_ * ct_;
-    } else {  // f = -mu_w d
-      a(0, 0) = a(1, 1) = 1.0;
-      b[0] = -mw_ * d[kNose][0];
-      b[1] = -mw_ * d[kNose][1];
+    const bool nose_stuck = (*contact_)[kNose].grip == Grip::kStuck;
+    const bool slate_stuck = (*contact_)[kSlate].grip == Grip::kStuck;
+    // The slate's unstuck friction along its direction, per unit of (sin - cos ft).
+    const double gx_d = -ms_ * d[kSlate][0], gy_d = -ms_ * d[kSlate][1];
+    double fx, ft, gx, gy;
+    if (!nose_stuck) {
+      fx = -mw_ * d[kNose][0];
+      ft = -mw_ * d[kNose][1];
+      if (slate_stuck) {
+        gx = -(kv_ - st_ * k) * fx / (kv_ + k);
+        gy = (kv_ * ct_ - (k - kv_ * st_) * ft) / (kv_ + k);
+      } else {
+        gx = gx_d * (st_ - ct_ * ft);
+        gy = gy_d * (st_ - ct_ * ft);
+      }
+    } else if (slate_stuck) {
+      // fx (kv + K) + gx (kv - K sin) = 0 and fx (kv - K sin) + gx (kv + K) = 0: both zero.
+      fx = gx = 0.0;
+      const double a = kv_ * st_ * st_ + k, b = k - kv_ * st_, c = kv_ + k;
+      const double r1 = -kv_ * st_ * ct_, r3 = kv_ * ct_;
+      const double det = a * c - b * b;
+      ft = (r1 * c - b * r3) / det;
+      gy = (a * r3 - b * r1) / det;
+    } else {
+      // gy = gy_d (sin - cos ft) in the nose's tangential row, which then gives ft alone.
+      const double b = k - kv_ * st_;
+      ft = (-kv_ * st_ * ct_ - b * gy_d * st_) / (kv_ * st_ * st_ + k - b * gy_d * ct_);
+      gx = gx_d * (st_ - ct_ * ft);
+      gy = gy_d * (st_ - ct_ * ft);
+      fx = -(kv_ - st_ * k) * gx / (kv_ + k);
     }
-    if ((*contact_)[kSlate].grip == Grip::kStuck) {
-      a.row(2) << kv_ - st_ * k, 0.0, kv_ + k, 0.0;
-      a.row(3) << 0.0, k - kv_ * st_, 0.0, kv_ + k;
-      b[3] = kv_ * ct_;
-    } else {  // g = -mu_s (sin - cos ft) d
-      a(2, 2) = a(3, 3) = 1.0;
-      a(2, 1) = -ms_ * d[kSlate][0] * ct_;
-      a(3, 1) = -ms_ * d[kSlate][1] * ct_;
-      b[2] = -ms_ * d[kSlate][0] * st_;
-      b[3] = -ms_ * d[kSlate][1] * st_;
-    }
-    return a.partialPivLu().solve(b);
+    MathavanFriction f;
+    f << fx, ft, gx, gy;
+    return f;
   }
 
   // The direction u on the cone's edge (friction -mu N u) in which contact j's slip grows along
