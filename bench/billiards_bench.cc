@@ -177,18 +177,13 @@ void BM_CushionImpact(benchmark::State& state) {
   TableSpec spec = *MakeTablePreset("pool-9ft");
   spec.params.cushion_model = static_cast<CushionModel>(state.range(0));
   const TableModel model = *TableModel::Create(spec);
-  const bool rolling = state.range(1) == 1;
+  const bool rolling = state.range(1) == 1, square = state.range(1) == 2;
   state.SetLabel(std::string(state.range(0) == 0   ? "han"
                              : state.range(0) == 2 ? "mathavan2010"
                                                    : "stronge") +
-                 (rolling ? ", rolling" : ", random"));
+                 (square ? ", stun or rolling, 10-90 deg" : rolling ? ", rolling" : ", random"));
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const bool square = state.range(1) == 2;
-  if (square) state.SetLabel(std::string(state.range(0) == 0   ? "han"
-                                         : state.range(0) == 2 ? "mathavan2010"
-                                                               : "stronge") +
-                             ", stun or rolling, 10-90 deg");
   std::vector<Ball> balls(256);
   for (Ball& b : balls) {
     if (square) {

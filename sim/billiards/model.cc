@@ -184,7 +184,7 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     // Phys. 77 (2009) 788, a Riley table tracked at up to 1000 frames a second): rolling balls
     // slowed at 0.124-0.126 m/s^2 and sliding ones at 1.75-2.40 (mu_s 0.212 as their 2010
     // cushion model took the slate's); Han's restitution is the one whose square rebound of a
-    // rolling ball fits their 31 measured rebounds best (bench/billiards_snooker_study.cc).
+    // rolling ball fits their fit to 31 measured rebounds best (bench/billiards_snooker_study.cc).
     t.params.mu_roll = 0.0127;
     t.params.mu_slide = 0.212;
     t.params.e_cushion = 0.924;
