@@ -427,6 +427,36 @@ void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
                "each start alone, %d resampled\n", misses, scored, resampled_misses);
 }
 
+// The cloth read from the tracks alone (TrackedStretches, ReadCloth): every stretch as a CSV
+// row, then the reading of each source as a comment line. Returns whether the synthetic
+// recordings' reading finds the reference table's cloth: its rolling resistance within 3 %
+// and its sliding friction within 10 %.
+bool ReadClothOf(const std::string& source, const std::vector<Recording>& recs, const TableSpec* truth) {
+  for (const Recording& r : recs) {
+    for (int b = 0; b < static_cast<int>(r.initial.balls.size()); ++b) {
+      for (const TrackedStretch& s : TrackedStretches(r, b)) {
+        std::printf("%s,%s,%s,%.3f,%.3f,%d,%.3f,%d,%.3f,%.3f,%.3f,%.4f,%.4f,%.5f,%.5f,%.5f,%s\n",
+                    source.c_str(), r.name.c_str(), r.initial.balls[static_cast<size_t>(b)].id.c_str(),
+                    s.t0_s, s.t1_s, s.points, std::min(s.roll_from_s, s.t1_s), s.slide_points,
+                    s.v0_mps, s.v_roll_mps, s.v1_mps, s.slide_mps2, s.slide_se_mps2,
+                    s.roll_decel_mps2, s.roll_lateral_mps2, s.roll_se_mps2,
+                    s.slide_read ? (s.roll_read ? "both" : "slide") : (s.roll_read ? "roll" : "none"));
+      }
+    }
+  }
+  const ClothReading c = ReadCloth(recs);
+  std::printf("# %s: rolling resistance %.5f (quartiles %.5f-%.5f, %d stretches), sliding friction "
+              "%.4f (quartiles %.4f-%.4f, %d stretches), %zu shots\n",
+              source.c_str(), c.mu_roll, c.mu_roll_q1, c.mu_roll_q3, c.rolling, c.mu_slide,
+              c.mu_slide_q1, c.mu_slide_q3, c.sliding, recs.size());
+  if (truth == nullptr) return true;
+  const bool ok = std::abs(c.mu_roll / truth->params.mu_roll - 1.0) <= 0.03 &&
+                  std::abs(c.mu_slide / truth->params.mu_slide - 1.0) <= 0.10;
+  std::printf("# %s: the reference table's rolling resistance %.5f and sliding friction %.4f: %s\n",
+              source.c_str(), truth->params.mu_roll, truth->params.mu_slide, ok ? "found" : "missed");
+  return ok;
+}
+
 }  // namespace
 }  // namespace sportsim::billiards
 
@@ -436,11 +466,13 @@ int main(int argc, char** argv) {
   bool synthetic = true;
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
-  bool aimed = false, strike_recovery = false, preset_given = false;
+  bool aimed = false, strike_recovery = false, preset_given = false, read_cloth = false;
   std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--strike-recovery")) {
       strike_recovery = true;
+    } else if (!std::strcmp(argv[i], "--read-cloth")) {
+      read_cloth = true;
     } else if (!std::strcmp(argv[i], "--quick")) {
       shots = 4;
     } else if (!std::strcmp(argv[i], "--shots") && i + 1 < argc) {
@@ -497,7 +529,8 @@ int main(int argc, char** argv) {
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
-                   "[--fit-elevation] [--resample] [--model M]... [--strike-recovery]\n");
+                   "[--fit-elevation] [--resample] [--model M]... [--strike-recovery] "
+                   "[--read-cloth]\n");
       return 2;
     }
   }
@@ -509,6 +542,45 @@ int main(int argc, char** argv) {
     }
     StrikeRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
     return 0;
+  }
+  // The recorded shots at --recordings, on --preset's table, in the tracker's frame; exits
+  // 2 for a bad flag, 1 for fewer than two usable shots.
+  TableSpec recorded_spec;
+  std::vector<Recording> recorded;
+  if (!path.empty()) {
+    absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);
+    if (!spec.ok()) {
+      std::fprintf(stderr, "--preset: %s\n", std::string(spec.status().message()).c_str());
+      return 2;
+    }
+    if (origin != "centre" && origin != "corner") {
+      std::fprintf(stderr, "--track-origin: centre or corner\n");
+      return 2;
+    }
+    const TrackFrame frame = TrackFrameOn(*spec, origin == "corner", scale);
+    if (absl::Status s = ValidateTrackFrame(frame); !s.ok()) {
+      std::fprintf(stderr, "--track-scale: %s\n", std::string(s.message()).c_str());
+      return 2;
+    }
+    recorded = FromPath(path, *TableModel::Create(*spec), frame, recorded_shots);
+    if (recorded.size() < 2) {
+      std::fprintf(stderr, "%s: fewer than two usable recordings\n", path.c_str());
+      return 1;
+    }
+    recorded_spec = *spec;
+  }
+  if (read_cloth) {
+    std::printf("source,shot,ball,t0_s,t1_s,points,roll_from_s,slide_points,v0_mps,v_roll_mps,"
+                "v1_mps,slide_mps2,slide_se_mps2,roll_decel_mps2,roll_lateral_mps2,roll_se_mps2,"
+                "read\n");
+    bool found = true;
+    if (synthetic) {
+      const TableSpec reference = ReferenceTable();
+      found = ReadClothOf("synthetic", Synthetic(shots, 33, false_detections, aimed, elevation),
+                          &reference);
+    }
+    if (!recorded.empty()) ReadClothOf("recorded", recorded, nullptr);
+    return found ? 0 : 3;
   }
   std::printf("source,model,constants,fit_mm,fit_rails,predict_final_mm,predict_rails,cpu_us,shots\n");
   if (!write_set.empty() && !WriteShotSet(write_set, *MakeTablePreset("carom"), Synthetic(shots, 33))) {
@@ -527,28 +599,8 @@ int main(int argc, char** argv) {
       Study(source, *MakeTablePreset("carom"), Synthetic(shots, 33, 0.0, aimed, elevation));
     }
   }
-  if (!path.empty()) {
-    absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);
-    if (!spec.ok()) {
-      std::fprintf(stderr, "--preset: %s\n", std::string(spec.status().message()).c_str());
-      return 2;
-    }
-    if (origin != "centre" && origin != "corner") {
-      std::fprintf(stderr, "--track-origin: centre or corner\n");
-      return 2;
-    }
-    const TrackFrame frame = TrackFrameOn(*spec, origin == "corner", scale);
-    if (absl::Status s = ValidateTrackFrame(frame); !s.ok()) {
-      std::fprintf(stderr, "--track-scale: %s\n", std::string(s.message()).c_str());
-      return 2;
-    }
-    const std::vector<Recording> recs =
-        FromPath(path, *TableModel::Create(*spec), frame, recorded_shots);
-    if (recs.size() < 2) {
-      std::fprintf(stderr, "%s: fewer than two usable recordings\n", path.c_str());
-      return 1;
-    }
-    Study(strike_bounds.resample ? "recorded-resample" : "recorded", *spec, recs);
+  if (!recorded.empty()) {
+    Study(strike_bounds.resample ? "recorded-resample" : "recorded", recorded_spec, recorded);
   }
   return 0;
 }

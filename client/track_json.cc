@@ -212,22 +212,108 @@ absl::StatusOr<std::vector<NamedTrack>> FromShotArray(const google::protobuf::Li
   return out;
 }
 
+// A match tracker's frame: fractions of the playing area from a corner, which needs the
+// table's size and takes no origin or scale.
+absl::StatusOr<billiards::TrackFrame> TrackerCorner(const billiards::TrackFrame& frame) {
+  if (!(frame.table_m.x() > 0 && frame.table_m.y() > 0)) {
+    return absl::InvalidArgumentError(
+        "a match tracker's export measures in fractions of the playing area: give the table");
+  }
+  if (frame.scale != 1.0 || !frame.origin.isZero()) {
+    return absl::InvalidArgumentError(
+        "a match tracker's export sets its own frame (fractions of the playing area from a "
+        "corner): give no origin or scale");
+  }
+  return billiards::TrackFrame{.origin = -frame.table_m / 2};
+}
+
+// One tracked entry of a match tracker's export (`path` names it in errors): its
+// PathTracking's data sets, each a ball and its coordinates; nullopt for an entry without
+// tracking data, which is not a shot.
+absl::StatusOr<std::optional<NamedTrack>> EntryTrack(const google::protobuf::Struct& entry,
+                                                     const std::string& path,
+                                                     const billiards::TrackFrame& frame,
+                                                     const billiards::TrackFrame& corner,
+                                                     SampleCount& count) {
+  const google::protobuf::Value* tracking = Field(entry, "PathTracking");
+  if (tracking == nullptr || !tracking->has_struct_value()) return std::nullopt;  // not tracked
+  const google::protobuf::Value* data = Field(tracking->struct_value(), "DataSets");
+  if (data == nullptr || !data->has_list_value() || data->list_value().values_size() == 0) {
+    return std::nullopt;
+  }
+  NamedTrack track;
+  if (const google::protobuf::Value* id = Field(entry, "PathTrackingId")) {
+    const std::optional<std::string> name = IdOf(*id);
+    if (!name) {
+      return absl::InvalidArgumentError(path + ".PathTrackingId: must be a string or a whole number");
+    }
+    track.name = *name;
+  }
+  billiards::TrackBuilder rows(corner);
+  int64_t shot_samples = 0;
+  std::vector<std::string> seen;
+  for (int d = 0; d < data->list_value().values_size(); ++d) {
+    const google::protobuf::Value& ds = data->list_value().values(d);
+    const std::string ds_path = absl::StrFormat("%sPathTracking.DataSets[%d]",
+                                                path.empty() ? "" : path + ".", d);
+    const auto fail = [&](const std::string& what) {
+      return absl::InvalidArgumentError(ds_path + what);
+    };
+    if (!ds.has_struct_value()) return fail(": must be an object");
+    const google::protobuf::Value* color = Field(ds.struct_value(), "BallColor");
+    const std::optional<std::string> ball =
+        color != nullptr && color->has_number_value() ? IdOf(*color) : std::nullopt;
+    if (!ball) return fail(".BallColor: must be a whole number");
+    if (std::find(seen.begin(), seen.end(), *ball) != seen.end()) {
+      return fail(".BallColor: ball " + *ball + " is tracked twice in the shot");
+    }
+    seen.push_back(*ball);
+    const google::protobuf::Value* coords = Field(ds.struct_value(), "Coords");
+    if (coords == nullptr || !coords->has_list_value()) return fail(".Coords: must be an array");
+    const int n = coords->list_value().values_size();
+    shot_samples += n;
+    if (absl::Status st = count.Add(shot_samples, n); !st.ok()) {
+      return absl::InvalidArgumentError((path.empty() ? "" : path + ": ") + std::string(st.message()));
+    }
+    for (int j = 0; j < n; ++j) {
+      const google::protobuf::Value& c = coords->list_value().values(j);
+      static constexpr const char* kKeys[3] = {"DeltaT_500us", "X", "Y"};
+      double v3[3];
+      for (int k = 0; k < 3; ++k) {
+        const google::protobuf::Value* f =
+            c.has_struct_value() ? Field(c.struct_value(), kKeys[k], kKeys[k]) : nullptr;
+        const std::optional<double> x = f != nullptr ? SampleOf(*f) : std::nullopt;
+        if (!x) {
+          return fail(absl::StrFormat(".Coords[%d].%s: must be a finite number within 1e6", j,
+                                      kKeys[k]));
+        }
+        v3[k] = *x;
+      }
+      // Ticks of 500 us; fractions of the length and the width from the corner.
+      if (absl::Status st = rows.Add(j + 1, 5e-4 * v3[0], *ball, v3[1] * frame.table_m.x(),
+                                     v3[2] * frame.table_m.y());
+          !st.ok()) {
+        return fail(absl::StrFormat(".Coords[%d]: %s", j, st.message()));
+      }
+    }
+  }
+  absl::StatusOr<billiards::TrackFile> file = std::move(rows).Finish();
+  if (!file.ok()) {
+    return absl::InvalidArgumentError((path.empty() ? "" : path + ": ") +
+                                      std::string(file.status().message()));
+  }
+  track.file = *std::move(file);
+  return track;
+}
+
 // A match-tracking document: {"Match": {"Sets": [{"Entries": [{"PathTrackingId": ...,
 // "PathTracking": {"DataSets": [{"BallColor": 1, "Coords": [{"DeltaT_500us": 0, "X": 0.2,
 // "Y": 0.6}, ...]}]}}]}]}}, positions as fractions of the playing area's length and width from
 // a corner, times in units of 500 us. Entries without tracking data are not shots.
 absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf::Struct& doc,
                                                           const billiards::TrackFrame& frame) {
-  if (!(frame.table_m.x() > 0 && frame.table_m.y() > 0)) {
-    return absl::InvalidArgumentError(
-        "a match-tracking document measures in fractions of the playing area: give the table");
-  }
-  if (frame.scale != 1.0 || !frame.origin.isZero()) {
-    return absl::InvalidArgumentError(
-        "a match-tracking document sets its own frame (fractions of the playing area from a "
-        "corner): give no origin or scale");
-  }
-  const billiards::TrackFrame corner{.origin = -frame.table_m / 2};
+  absl::StatusOr<billiards::TrackFrame> corner = TrackerCorner(frame);
+  if (!corner.ok()) return corner.status();
   const google::protobuf::Value* match = Field(doc, "Match");
   const google::protobuf::Value* sets =
       match != nullptr && match->has_struct_value() ? Field(match->struct_value(), "Sets")
@@ -250,81 +336,34 @@ absl::StatusOr<std::vector<NamedTrack>> FromMatchTracking(const google::protobuf
       const google::protobuf::Value& entry = entries->list_value().values(e);
       const std::string path = absl::StrFormat("%s.Entries[%d]", set_path, e);
       if (!entry.has_struct_value()) return absl::InvalidArgumentError(path + ": must be an object");
-      const google::protobuf::Value* tracking = Field(entry.struct_value(), "PathTracking");
-      if (tracking == nullptr || !tracking->has_struct_value()) continue;  // not tracked
-      const google::protobuf::Value* data = Field(tracking->struct_value(), "DataSets");
-      if (data == nullptr || !data->has_list_value() || data->list_value().values_size() == 0) {
-        continue;
-      }
+      absl::StatusOr<std::optional<NamedTrack>> track =
+          EntryTrack(entry.struct_value(), path, frame, *corner, count);
+      if (!track.ok()) return track.status();
+      if (!track->has_value()) continue;
       if (static_cast<int>(out.size()) == kMaxShotsPerSet) {
         return absl::InvalidArgumentError(absl::StrFormat("at most %d shots in a set", kMaxShotsPerSet));
       }
-      NamedTrack track;
-      if (const google::protobuf::Value* id =
-              Field(entry.struct_value(), "PathTrackingId")) {
-        const std::optional<std::string> name = IdOf(*id);
-        if (!name) {
-          return absl::InvalidArgumentError(path + ".PathTrackingId: must be a string or a whole number");
-        }
-        track.name = *name;
-      } else {
-        track.name = absl::StrFormat("%d.%d", s, e);
-      }
-      billiards::TrackBuilder rows(corner);
-      int64_t shot_samples = 0;
-      std::vector<std::string> seen;
-      for (int d = 0; d < data->list_value().values_size(); ++d) {
-        const google::protobuf::Value& ds = data->list_value().values(d);
-        const std::string ds_path = absl::StrFormat("%s.PathTracking.DataSets[%d]", path, d);
-        const auto fail = [&](const std::string& what) {
-          return absl::InvalidArgumentError(ds_path + what);
-        };
-        if (!ds.has_struct_value()) return fail(": must be an object");
-        const google::protobuf::Value* color = Field(ds.struct_value(), "BallColor");
-        const std::optional<std::string> ball =
-            color != nullptr && color->has_number_value() ? IdOf(*color) : std::nullopt;
-        if (!ball) return fail(".BallColor: must be a whole number");
-        if (std::find(seen.begin(), seen.end(), *ball) != seen.end()) {
-          return fail(".BallColor: ball " + *ball + " is tracked twice in the shot");
-        }
-        seen.push_back(*ball);
-        const google::protobuf::Value* coords = Field(ds.struct_value(), "Coords");
-        if (coords == nullptr || !coords->has_list_value()) return fail(".Coords: must be an array");
-        const int n = coords->list_value().values_size();
-        shot_samples += n;
-        if (absl::Status st = count.Add(shot_samples, n); !st.ok()) {
-          return absl::InvalidArgumentError(path + ": " + std::string(st.message()));
-        }
-        for (int j = 0; j < n; ++j) {
-          const google::protobuf::Value& c = coords->list_value().values(j);
-          static constexpr const char* kKeys[3] = {"DeltaT_500us", "X", "Y"};
-          double v3[3];
-          for (int k = 0; k < 3; ++k) {
-            const google::protobuf::Value* f =
-                c.has_struct_value() ? Field(c.struct_value(), kKeys[k], kKeys[k]) : nullptr;
-            const std::optional<double> x = f != nullptr ? SampleOf(*f) : std::nullopt;
-            if (!x) {
-              return fail(absl::StrFormat(".Coords[%d].%s: must be a finite number within 1e6", j,
-                                          kKeys[k]));
-            }
-            v3[k] = *x;
-          }
-          // Ticks of 500 us; fractions of the length and the width from the corner.
-          if (absl::Status st = rows.Add(j + 1, 5e-4 * v3[0], *ball, v3[1] * frame.table_m.x(),
-                                         v3[2] * frame.table_m.y());
-              !st.ok()) {
-            return fail(absl::StrFormat(".Coords[%d]: %s", j, st.message()));
-          }
-        }
-      }
-      absl::StatusOr<billiards::TrackFile> file = std::move(rows).Finish();
-      if (!file.ok()) return absl::InvalidArgumentError(path + ": " + std::string(file.status().message()));
-      track.file = *std::move(file);
-      out.push_back(std::move(track));
+      if ((*track)->name.empty()) (*track)->name = absl::StrFormat("%d.%d", s, e);
+      out.push_back(**std::move(track));
     }
   }
   if (out.empty()) return absl::InvalidArgumentError("Match: no entry has tracking data");
   return out;
+}
+
+// A tracker's export of one entry, a shot on its own: {"PathTracking": {"DataSets": [...]},
+// ...}, as in a match-tracking document; named by its PathTrackingId when it has one.
+absl::StatusOr<std::vector<NamedTrack>> FromTrackerEntry(const google::protobuf::Struct& doc,
+                                                         const billiards::TrackFrame& frame) {
+  absl::StatusOr<billiards::TrackFrame> corner = TrackerCorner(frame);
+  if (!corner.ok()) return corner.status();
+  SampleCount count;
+  absl::StatusOr<std::optional<NamedTrack>> track = EntryTrack(doc, "", frame, *corner, count);
+  if (!track.ok()) return track.status();
+  if (!track->has_value()) {
+    return absl::InvalidArgumentError("PathTracking.DataSets: must be a non-empty array of balls");
+  }
+  return std::vector<NamedTrack>{**std::move(track)};
 }
 
 // A document's shots, whichever of the two layouts it has.
@@ -334,8 +373,12 @@ absl::StatusOr<std::vector<NamedTrack>> FromDocument(const google::protobuf::Val
   if (doc.has_struct_value() && Field(doc.struct_value(), "Match") != nullptr) {
     return FromMatchTracking(doc.struct_value(), frame);
   }
+  if (doc.has_struct_value() && Field(doc.struct_value(), "PathTracking") != nullptr) {
+    return FromTrackerEntry(doc.struct_value(), frame);
+  }
   return absl::InvalidArgumentError(
-      "a shot set must be a JSON array of shots or a match-tracking document (\"Match\")");
+      "a shot set must be a JSON array of shots, a match-tracking document (\"Match\") or a "
+      "tracker's entry (\"PathTracking\")");
 }
 
 }  // namespace
@@ -357,11 +400,13 @@ absl::StatusOr<std::vector<NamedTrack>> ParseTracks(std::string_view text,
   const size_t first = text.find_first_not_of(" \t\r\n");
   if (first != std::string_view::npos && text[first] == '[') return ParseShotSet(text, frame);
   if (first != std::string_view::npos && text[first] == '{') {
-    // One JSON object holding "Match" is a match-tracking document; anything else that starts
-    // with '{' is JSON lines (a one-line file of them is a JSON object too).
+    // One JSON object holding "Match" is a match-tracking document, one holding "PathTracking"
+    // a tracker's entry; anything else that starts with '{' is JSON lines (a one-line file of
+    // them is a JSON object too).
     google::protobuf::Value doc;
     if (google::protobuf::util::JsonStringToMessage(std::string(text), &doc).ok() &&
-        doc.has_struct_value() && Field(doc.struct_value(), "Match") != nullptr) {
+        doc.has_struct_value() && (Field(doc.struct_value(), "Match") != nullptr ||
+                                   Field(doc.struct_value(), "PathTracking") != nullptr)) {
       if (absl::Status s = billiards::ValidateTrackFrame(frame); !s.ok()) return s;
       return FromDocument(doc, frame);
     }

@@ -23,7 +23,8 @@
 // {"DataSets": [{"BallColor": 1, "Coords": [{"DeltaT_500us": 0, "X": 0.21, "Y": 0.64}, ...]}]}}]}]}},
 // each tracked entry a shot named by its PathTrackingId, X and Y fractions of the playing
 // area's length and width from a corner, times in ticks of 500 us. It sets its own frame, so
-// it needs the table's size (TrackFrame::table_m) and no origin or scale.
+// it needs the table's size (TrackFrame::table_m) and no origin or scale. A tracker also
+// exports one entry on its own, {"PathTracking": {...}, ...}: a document of one shot.
 #ifndef SPORTSIM_CLIENT_TRACK_JSON_H_
 #define SPORTSIM_CLIENT_TRACK_JSON_H_
 
@@ -56,18 +57,18 @@ struct NamedTrack {
 inline constexpr int kMaxShotsPerSet = 10000;
 inline constexpr int kMaxShotSetSamples = 4000000;
 
-/// Parses a shot set or a match-tracking document. InvalidArgument naming the shot (its index
-/// or its path in the document) and the ball for a document that is neither, a shot without
-/// balls, a ball without its samples or with arrays of different lengths, a sample that is
-/// not a finite number within 1e6, a ball tracked twice, more than kMaxShotsPerSet shots or
-/// kMaxShotSetSamples samples, or an invalid frame. A shot set's balls are in the order of
+/// Parses a shot set, a match-tracking document or a tracker's entry. InvalidArgument naming
+/// the shot (its index or its path in the document) and the ball for a document that is none
+/// of them, a shot without balls, a ball without its samples or with arrays of different
+/// lengths, a sample that is not a finite number within 1e6, a ball tracked twice, more than
+/// kMaxShotsPerSet shots or kMaxShotSetSamples samples, or an invalid frame. A shot set's balls are in the order of
 /// their ids (a document's keys have no order); a match's in the order of its data sets.
 absl::StatusOr<std::vector<NamedTrack>> ParseShotSet(std::string_view text,
                                                      const billiards::TrackFrame& frame = {});
 
 /// The shots of a file in any of the forms: a shot set when it starts with '[' (after blanks),
-/// a match-tracking document when it is one JSON object with a "Match" key, else one shot
-/// (ParseTrackText), unnamed.
+/// a match-tracking document when it is one JSON object with a "Match" key, a tracker's entry
+/// when one with a "PathTracking" key, else one shot (ParseTrackText), unnamed.
 absl::StatusOr<std::vector<NamedTrack>> ParseTracks(std::string_view text,
                                                     const billiards::TrackFrame& frame = {});
 

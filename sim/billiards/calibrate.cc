@@ -9,7 +9,10 @@
 #include <random>
 #include <utility>
 
+#include "Eigen/Cholesky"
 #include "Eigen/Eigenvalues"
+#include "Eigen/LU"
+#include "Eigen/QR"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
 #include "unsupported/Eigen/LevenbergMarquardt"
@@ -1631,6 +1634,361 @@ std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> e
     if (e.kind == EventKind::kBallCushion && e.a == ball) out.push_back(NearestRail(spec, e.ra));
   }
   return out;
+}
+
+namespace {
+
+// A ball's tracked points in time order.
+struct BallTrack {
+  std::vector<double> t;
+  std::vector<Eigen::Vector2d> p;
+};
+BallTrack TrackOf(const Recording& rec, int ball) {
+  BallTrack b;
+  for (const TrackPoint& q : rec.track) {
+    if (q.ball != ball) continue;
+    b.t.push_back(q.t_s);
+    b.p.push_back(q.xy);
+  }
+  return b;
+}
+
+// The tracker's noise on a coordinate, from uneven steps: an inner point's distance from the
+// line through its two neighbours (taken at its time, with weights wa and wb on them) has
+// variance sigma^2 (1 + wa^2 + wb^2) where the ball's acceleration is small; the median of
+// the distances so normalised, over the normal distribution's 0.6745, estimates sigma (at
+// least 10 um). Most of a track rolls, so a slide's curvature barely moves the median.
+double UnevenNoise(const BallTrack& b) {
+  std::vector<double> e;
+  for (size_t j = 1; j + 1 < b.t.size(); ++j) {
+    const double span = b.t[j + 1] - b.t[j - 1];
+    if (!(span > 0.0)) continue;
+    const double wa = (b.t[j + 1] - b.t[j]) / span, wb = (b.t[j] - b.t[j - 1]) / span;
+    const Eigen::Vector2d d = b.p[j] - (wa * b.p[j - 1] + wb * b.p[j + 1]);
+    const double norm = std::sqrt(1.0 + wa * wa + wb * wb);
+    e.push_back(std::abs(d.x()) / norm);
+    e.push_back(std::abs(d.y()) / norm);
+  }
+  return std::max(1e-5, Median(std::move(e)) / 0.6745);
+}
+
+// Between two contacts a ball slides at a constant acceleration a until its slip vanishes,
+// at time c, then rolls at a constant acceleration r. With u the time from the stretch's first
+// point, each coordinate is p0 + v0 u + a A(u) + r B(u), where A = u^2/2 before c and
+// c u - c^2/2 after it, B = 0 before c and (u - c)^2/2 after it: position and velocity
+// continuous at c, and linear in (p0, v0, a, r) for a given c. c = 0 rolls throughout (A = 0);
+// c = infinity slides throughout (B = 0).
+Eigen::Vector4d SlideRollBasis(double u, double c) {
+  if (u < c) return {1.0, u, 0.5 * u * u, 0.0};
+  return {1.0, u, c * u - 0.5 * c * c, 0.5 * (u - c) * (u - c)};
+}
+
+// The fit of both coordinates for one c, grown a point at a time by Givens rotations: the
+// triangular factor of the basis, the rotated positions, and the residual sum of squares the
+// rotations leave (positions from the first point's). Stable where the normal equations are
+// not: a 30 s window's squared positions are 10^10 times its residuals. A coefficient no
+// point informs yet (r before c) stays zero.
+struct SlideRollSums {
+  double c = 0.0;
+  Eigen::Matrix4d r = Eigen::Matrix4d::Zero();
+  Eigen::Matrix<double, 4, 2> z = Eigen::Matrix<double, 4, 2>::Zero();
+  double ssr = 0.0;
+  void Add(double u, const Eigen::Vector2d& q) {
+    Eigen::Vector4d phi = SlideRollBasis(u, c);
+    Eigen::Vector2d y = q;
+    for (int i = 0; i < 4; ++i) {
+      if (phi(i) == 0.0) continue;
+      const double h = std::hypot(r(i, i), phi(i));
+      const double cs = r(i, i) / h, sn = phi(i) / h;
+      for (int j = i; j < 4; ++j) {
+        const double top = r(i, j), row = phi(j);
+        r(i, j) = cs * top + sn * row;
+        phi(j) = cs * row - sn * top;
+      }
+      for (int k = 0; k < 2; ++k) {
+        const double top = z(i, k), row = y(k);
+        z(i, k) = cs * top + sn * row;
+        y(k) = cs * row - sn * top;
+      }
+    }
+    ssr += y.squaredNorm();
+  }
+  // The coefficients (p0, v0, a, r; a column each coordinate), by back substitution; zero
+  // where the factor's diagonal is (nothing informs that coefficient).
+  Eigen::Matrix<double, 4, 2> Coefficients() const {
+    Eigen::Matrix<double, 4, 2> coef = Eigen::Matrix<double, 4, 2>::Zero();
+    const double tiny = 1e-12 * r.diagonal().cwiseAbs().maxCoeff();
+    for (int i = 3; i >= 0; --i) {
+      if (!(std::abs(r(i, i)) > tiny)) continue;
+      Eigen::RowVector2d rhs = z.row(i);
+      for (int j = i + 1; j < 4; ++j) rhs -= r(i, j) * coef.row(j);
+      coef.row(i) = rhs / r(i, i);
+    }
+    return coef;
+  }
+  // The residual sum of squares; infinity for a split whose slide is no slide (its
+  // acceleration outside kSlidingMinAccel-kSlidingMaxAccel): a ball between contacts slides
+  // at mu_slide g, and a window that only rolls is the split at 0.
+  double Residual() const {
+    if (c > 0.0 && std::isfinite(c)) {
+      const double slide = Coefficients().row(2).norm();
+      if (slide < kSlidingMinAccel || slide > kSlidingMaxAccel) {
+        return std::numeric_limits<double>::infinity();
+      }
+    }
+    return ssr;
+  }
+};
+
+// Fewest points a stretch's fit takes (8 coefficients and c), the longest a window grows (s),
+// the longest slide it looks for (s: a slip of 13 m/s on a 0.2 cloth), and the finest step
+// between the roll's start times it tries (s).
+constexpr int kStretchMinPoints = 8;
+constexpr double kStretchMaxS = 30.0;
+constexpr double kMaxSlideS = 2.0;
+constexpr double kRollStartStepS = 0.005;
+
+// Whether m points' residual sum of squares (both coordinates) is the noise's: within 5
+// standard deviations of its chi-square mean, with 2 m - 9 degrees of freedom, and 10 % over
+// it for the noise's own estimate (a median of a few thousand distances, good to 3 % or so,
+// which a thousand points' sum doubles and no longer hides). The window is tested at every
+// point it grows by, a thousand times over a long roll, and at 3 standard deviations the
+// noise alone ends one in ten of them.
+bool FitsNoise(double ssr, int m, double sigma) {
+  const double dof = 2.0 * m - 9.0;
+  return ssr <= sigma * sigma * (1.1 * dof + 5.0 * std::sqrt(2.0 * dof));
+}
+
+// The points a window's newest residuals are tested over, and their bound (in squared noise,
+// both coordinates: a chi-square of 10 passes 40 once in 60,000). A contact shows first
+// there: a jump of 5 cm/s moves the next five points by 1 to 5 mm at 50 Hz, which a long
+// window's whole sum would take many more points to notice.
+constexpr int kTailPoints = 5;
+constexpr double kTailBound = 40.0;
+
+// The sums of points lo..hi for the roll from c (from point lo).
+SlideRollSums SumsOver(const BallTrack& b, int lo, int hi, double c) {
+  const size_t ulo = static_cast<size_t>(lo);
+  SlideRollSums sums{.c = c};
+  for (size_t j = ulo; j <= static_cast<size_t>(hi); ++j) {
+    sums.Add(b.t[j] - b.t[ulo], b.p[j] - b.p[ulo]);
+  }
+  return sums;
+}
+
+// The roll's start c (from point lo) refined between the steps beside the one it falls in, by
+// golden section on the residual: a start half a 50 Hz step off moves a 2 m/s^2 slide's
+// positions by a tenth of a millimetre, as much as a good tracker's noise.
+double RefineRollStart(const BallTrack& b, int lo, int hi, double c) {
+  if (!(c > 0.0) || !std::isfinite(c)) return c;
+  const double t0 = b.t[static_cast<size_t>(lo)];
+  int j = lo;
+  while (j + 1 < hi && b.t[static_cast<size_t>(j + 1)] - t0 < c) ++j;
+  double x0 = b.t[static_cast<size_t>(std::max(lo, j - 1))] - t0;
+  double x1 = b.t[static_cast<size_t>(std::min(hi, j + 2))] - t0;
+  const auto f = [&](double x) { return SumsOver(b, lo, hi, x).Residual(); };
+  constexpr double kGolden = 0.6180339887498949;
+  double a = x1 - kGolden * (x1 - x0), bb = x0 + kGolden * (x1 - x0);
+  double fa = f(a), fb = f(bb);
+  for (int it = 0; it < 30; ++it) {
+    if (fa <= fb) {
+      x1 = bb;
+      bb = a;
+      fb = fa;
+      a = x1 - kGolden * (x1 - x0);
+      fa = f(a);
+    } else {
+      x0 = a;
+      a = bb;
+      fa = fb;
+      bb = x0 + kGolden * (x1 - x0);
+      fb = f(bb);
+    }
+  }
+  const double best = fa <= fb ? a : bb;
+  return std::min(fa, fb) <= f(c) ? best : c;
+}
+
+// The far end of the longest window from point `from` whose points fit one slide and roll
+// within the noise, and in *roll_from the best start of its roll (from the window's first
+// point); -1 when not even its first kStretchMinPoints do. The roll's start is tried at 0, in
+// the middle of every step within kMaxSlideS (its best is within half a step, and a slide's
+// last 10 ms move a ball by a tenth of a millimetre), and past the end.
+int GrowStretch(const BallTrack& b, int from, double sigma, double* roll_from) {
+  const int n = static_cast<int>(b.t.size());
+  const double t0 = b.t[static_cast<size_t>(from)];
+  const Eigen::Vector2d p0 = b.p[static_cast<size_t>(from)];
+  SlideRollSums sliding{.c = std::numeric_limits<double>::infinity()};
+  std::vector<SlideRollSums> splits = {SlideRollSums{.c = 0.0}};
+  double last_grid = 0.0;  // the latest start on the grid
+  int last = -1;
+  for (int k = from; k < n; ++k) {
+    const size_t uk = static_cast<size_t>(k);
+    const double u = b.t[uk] - t0;
+    if (u > kStretchMaxS) break;
+    if (k > from) {
+      // A roll starting within the last step: every earlier point slid, as in `sliding`.
+      const double c = 0.5 * (b.t[uk - 1] - t0 + u);
+      if (c <= kMaxSlideS && c - last_grid >= kRollStartStepS) {
+        splits.push_back(sliding);
+        splits.back().c = c;
+        last_grid = c;
+      }
+    }
+    const Eigen::Vector2d q = b.p[uk] - p0;
+    sliding.Add(u, q);
+    for (SlideRollSums& s : splits) s.Add(u, q);
+    const int m = k - from + 1;
+    if (m < kStretchMinPoints) continue;
+    const SlideRollSums* best = &sliding;
+    double ssr = sliding.Residual();
+    for (const SlideRollSums& s : splits) {
+      if (const double r = s.Residual(); r < ssr) {
+        ssr = r;
+        best = &s;
+      }
+    }
+    if (!FitsNoise(ssr, m, sigma) && best->c > 0.0 && std::isfinite(best->c)) {
+      // The grid's best start may be off by up to half a step, which over a long roll the
+      // noise no longer hides: refined, it joins the starts tried from here on.
+      SlideRollSums refined = SumsOver(b, from, k, RefineRollStart(b, from, k, best->c));
+      if (const double r = refined.Residual(); r < ssr) {
+        ssr = r;
+        splits.push_back(std::move(refined));
+        best = &splits.back();
+      }
+    }
+    if (!FitsNoise(ssr, m, sigma)) break;
+    if (m >= 2 * kTailPoints) {
+      const Eigen::Matrix<double, 4, 2> coef = best->Coefficients();
+      double tail = 0.0;
+      for (int j = k - kTailPoints + 1; j <= k; ++j) {
+        const size_t uj = static_cast<size_t>(j);
+        const Eigen::Vector2d fit = coef.transpose() * SlideRollBasis(b.t[uj] - t0, best->c);
+        tail += (b.p[uj] - p0 - fit).squaredNorm();
+      }
+      if (tail > kTailBound * sigma * sigma) break;
+    }
+    last = k;
+    *roll_from = best->c;
+  }
+  return last;
+}
+
+// The fit over points lo..hi with the roll from c (from point lo), read as a stretch. The
+// standard errors come from the Jacobian of all nine coefficients, c with them (a slide's end
+// and its acceleration trade off against each other), at the noise.
+TrackedStretch DescribeStretch(const BallTrack& b, int ball, int lo, int hi, double c,
+                               double sigma) {
+  c = RefineRollStart(b, lo, hi, c);
+  const size_t ulo = static_cast<size_t>(lo), uhi = static_cast<size_t>(hi);
+  const Eigen::Matrix<double, 4, 2> coef = SumsOver(b, lo, hi, c).Coefficients();
+  const Eigen::Vector2d v0 = coef.row(1).transpose();
+  const Eigen::Vector2d slide = coef.row(2).transpose();
+  const Eigen::Vector2d roll = coef.row(3).transpose();
+  // The Jacobian's columns: x's p0, v0, a, r; y's; then c.
+  Eigen::MatrixXd jac = Eigen::MatrixXd::Zero(2 * (hi - lo + 1), 9);
+  for (size_t j = ulo; j <= uhi; ++j) {
+    const double u = b.t[j] - b.t[ulo];
+    const Eigen::Vector4d phi = SlideRollBasis(u, c);
+    const double after = u >= c ? u - c : 0.0;
+    for (int axis = 0; axis < 2; ++axis) {
+      const Eigen::Index row = static_cast<Eigen::Index>(2 * (j - ulo)) + axis;
+      jac.block<1, 4>(row, 4 * axis) = phi.transpose();
+      jac(row, 8) = (slide(axis) - roll(axis)) * after;
+    }
+  }
+  const Eigen::MatrixXd pinv = jac.completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::Matrix<double, 9, 9> cov = sigma * sigma * pinv * pinv.transpose();
+  // The variance of a vector coefficient's part along a unit direction.
+  const auto along_var = [&](int index, const Eigen::Vector2d& dir) {
+    Eigen::Matrix2d block;
+    block << cov(index, index), cov(index, index + 4), cov(index + 4, index),
+        cov(index + 4, index + 4);
+    return std::max(0.0, dir.dot(block * dir));
+  };
+  TrackedStretch s;
+  s.ball = ball;
+  s.t0_s = b.t[ulo];
+  s.t1_s = b.t[uhi];
+  s.points = hi - lo + 1;
+  const double span = s.t1_s - s.t0_s;
+  const double slide_s = std::min(c, span);
+  s.roll_from_s = s.t0_s + c;
+  for (size_t j = ulo; j <= uhi && b.t[j] - b.t[ulo] < c; ++j) ++s.slide_points;
+  s.v0_mps = v0.norm();
+  const Eigen::Vector2d v_roll = v0 + slide * slide_s;
+  s.v_roll_mps = v_roll.norm();
+  s.v1_mps = (v_roll + roll * (span - slide_s)).norm();
+  s.slide_mps2 = slide.norm();
+  if (s.slide_mps2 > 0.0) s.slide_se_mps2 = std::sqrt(along_var(2, slide.normalized()));
+  if (v_roll.norm() > 0.0) {
+    const Eigen::Vector2d along = v_roll.normalized();
+    s.roll_decel_mps2 = -roll.dot(along);
+    s.roll_lateral_mps2 = along.x() * roll.y() - along.y() * roll.x();
+    s.roll_se_mps2 = std::sqrt(along_var(3, along));
+  }
+  const int roll_points = s.points - s.slide_points;
+  s.slide_read = slide_s >= 0.1 && s.slide_points >= 6 && s.slide_mps2 >= kSlidingMinAccel &&
+                 s.slide_mps2 <= kSlidingMaxAccel;
+  s.roll_read = span - slide_s >= 0.4 && roll_points >= 10 && roll.norm() <= kRollingMaxAccel &&
+                s.roll_decel_mps2 > 0.0 && s.v_roll_mps >= 0.05;
+  return s;
+}
+
+// The q-quantile of a list, linear between order statistics (0 when empty).
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+}  // namespace
+
+std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int ball) {
+  if (ball < 0 || ball >= static_cast<int>(recording.initial.balls.size())) return {};
+  const BallTrack b = TrackOf(recording, ball);
+  const int n = static_cast<int>(b.t.size());
+  if (n < kStretchMinPoints) return {};
+  const double sigma = UnevenNoise(b);
+  std::vector<TrackedStretch> out;
+  int i = 0;
+  while (i + kStretchMinPoints <= n) {
+    double c = 0.0;
+    const int k = GrowStretch(b, i, sigma, &c);
+    if (k < 0) {
+      ++i;
+      continue;
+    }
+    out.push_back(DescribeStretch(b, ball, i, k, c, sigma));
+    i = k + 1;
+  }
+  return out;
+}
+
+ClothReading ReadCloth(std::span<const Recording> recordings, double gravity_mps2) {
+  std::vector<double> roll, slide;
+  for (const Recording& rec : recordings) {
+    for (int ball = 0; ball < static_cast<int>(rec.initial.balls.size()); ++ball) {
+      for (const TrackedStretch& s : TrackedStretches(rec, ball)) {
+        if (s.roll_read) roll.push_back(s.roll_decel_mps2 / gravity_mps2);
+        if (s.slide_read) slide.push_back(s.slide_mps2 / gravity_mps2);
+      }
+    }
+  }
+  ClothReading r;
+  r.rolling = static_cast<int>(roll.size());
+  r.sliding = static_cast<int>(slide.size());
+  r.mu_roll = Quantile(roll, 0.5);
+  r.mu_roll_q1 = Quantile(roll, 0.25);
+  r.mu_roll_q3 = Quantile(roll, 0.75);
+  r.mu_slide = Quantile(slide, 0.5);
+  r.mu_slide_q1 = Quantile(slide, 0.25);
+  r.mu_slide_q3 = Quantile(slide, 0.75);
+  return r;
 }
 
 absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,

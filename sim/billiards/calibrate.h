@@ -263,6 +263,58 @@ std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recordi
 /// events as the rail nearest where it happened.
 std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> events, int ball);
 
+/// A stretch of a tracked ball's path between two contacts (a strike, a ball, a cushion),
+/// read from the track alone, with no model of the table: on cloth a ball slides at a constant
+/// acceleration (mu_slide g against its slip, whose direction holds while it slides) until
+/// its slip vanishes, then rolls, slowing at mu_roll g along its path. Both coordinates are
+/// fitted as that motion (position and velocity continuous where the roll begins, the time it
+/// begins chosen for the least residual), over a window grown point by point while the
+/// residuals stay within the tracker's noise (a chi-square bound at 5 standard deviations): a
+/// contact's jump in velocity ends it.
+struct TrackedStretch {
+  int ball = 0;
+  double t0_s = 0.0, t1_s = 0.0;  ///< its first and last tracked points
+  int points = 0;
+  /// When the roll begins: t0_s when it rolls throughout, past t1_s when it slides throughout.
+  double roll_from_s = 0.0;
+  int slide_points = 0;        ///< points before the roll
+  double v0_mps = 0.0;         ///< the fitted speed at t0_s
+  double v_roll_mps = 0.0;     ///< ... where the roll begins (or at t1_s)
+  double v1_mps = 0.0;         ///< ... at t1_s
+  double slide_mps2 = 0.0;     ///< the slide's acceleration (its magnitude)
+  double roll_decel_mps2 = 0.0;    ///< the roll's acceleration against the motion
+  double roll_lateral_mps2 = 0.0;  ///< ... and across it (signed, left of it positive)
+  /// The standard errors of the slide's acceleration and the roll's deceleration at the
+  /// tracker's noise (all nine coefficients fitted, when the roll begins among them).
+  double slide_se_mps2 = 0.0, roll_se_mps2 = 0.0;
+  /// The slide is read when it lasts 0.1 s and 6 points or more, its acceleration between
+  /// kSlidingMinAccel and kSlidingMaxAccel (sliding friction 0.08-0.6); the roll when it lasts 0.4 s
+  /// and 10 points or more, its acceleration at most kRollingMaxAccel (no cloth's rolling
+  /// resistance comes near; a slide's friction is ten times as much), slowing, and moving
+  /// (0.05 m/s or faster) where it begins.
+  bool slide_read = false, roll_read = false;
+};
+inline constexpr double kRollingMaxAccel = 0.5;
+inline constexpr double kSlidingMinAccel = 0.8;
+inline constexpr double kSlidingMaxAccel = 6.0;
+
+/// The stretches of ball `ball`'s track in a recording, in time order (empty for a ball
+/// index out of range or too few tracked points). The tracker's noise is estimated from the
+/// track: each point's distance from the line through its two neighbours, in time, which
+/// holds for the uneven steps trackers give (many log a ball only when it has moved).
+std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int ball);
+
+/// What a set of recordings says of their cloth, read from every ball's stretches: the
+/// rolling resistance (a roll's deceleration over g) and the sliding friction (a slide's
+/// acceleration over g), each as the median and quartiles over the stretches (each stretch one measurement: the spread between them is the cloth's and the
+/// balls', far above a single fit's standard error). Zero where no stretch was found.
+struct ClothReading {
+  int rolling = 0, sliding = 0;  ///< stretches read
+  double mu_roll = 0.0, mu_roll_q1 = 0.0, mu_roll_q3 = 0.0;
+  double mu_slide = 0.0, mu_slide_q1 = 0.0, mu_slide_q3 = 0.0;
+};
+ClothReading ReadCloth(std::span<const Recording> recordings, double gravity_mps2 = 9.81);
+
 /// A synthetic recording: `strike` played on `initial` under `model` at strike_time_s on the
 /// tracker's clock, every ball on the table tracked at `rate_hz` (at t = k / rate_hz, k >= 1)
 /// until all rest after the strike (at most max_s), each coordinate with Gaussian noise of

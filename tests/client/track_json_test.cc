@@ -274,6 +274,24 @@ TEST(ShotSetTest, MatchTrackingDocumentsReadAsTheirCsv) {
                       carom),
               HasSubstr("DataSets[0].Coords[1].X: must be a finite number within 1e6"));
   EXPECT_THAT(message(one(R"({"BallColor": 1})"), carom), HasSubstr("DataSets[0].Coords: must be an array"));
+  // A tracker's export of one entry, a shot on its own (a file of its own): read as the same
+  // entry in a match, named by its id when it has one.
+  const std::string entry = R"({"Path": null, "PathTrackingId": 7, "PathTracking": {"DataSets": [
+        {"BallColor": 2, "Coords": [{"DeltaT_500us": 0, "X": 0.75, "Y": 0.25}]},
+        {"BallColor": 1, "Coords": [{"DeltaT_500us": 0, "X": 0.25, "Y": 0.5},
+                                    {"DeltaT_500us": 40, "X": 0.26, "Y": 0.5}]}],
+        "TableWidth": 2840, "TableHeight": 1420}, "White": {"relX": 0.25, "relY": 0.5}})";
+  absl::StatusOr<std::vector<NamedTrack>> single = ParseTracks(entry, carom);
+  ASSERT_TRUE(single.ok()) << single.status();
+  ASSERT_EQ(single->size(), 1u);
+  EXPECT_EQ((*single)[0].name, "7");
+  ExpectNear((*single)[0].file, (*shots)[0].file);
+  EXPECT_EQ(ParseShotSet(entry, carom).status(), single.status());
+  EXPECT_THAT(message(entry, {}), HasSubstr("give the table"));
+  EXPECT_THAT(message(R"({"PathTracking": {"DataSets": []}})", carom),
+              HasSubstr("PathTracking.DataSets: must be a non-empty array of balls"));
+  EXPECT_THAT(message(R"({"PathTracking": {"DataSets": [{"BallColor": 1}]}})", carom),
+              HasSubstr("PathTracking.DataSets[0].Coords: must be an array"));
   // One line of JSON lines is a JSON object too: without "Match" it stays a track file.
   absl::StatusOr<std::vector<NamedTrack>> line =
       ParseTracks("{\"t\": 0, \"ball\": \"a\", \"x\": 0.1, \"y\": 0.2}\n", carom);

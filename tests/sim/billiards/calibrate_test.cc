@@ -185,6 +185,99 @@ TEST(CalibrateTest, TrackedRailsAreTheShotsCushions) {
   }
 }
 
+// A ball struck on endless cloth slides, its acceleration mu_slide g against its slip, until
+// the slip vanishes, 2 u0 / (7 mu_slide g) after the strike (u0 the slip the strike leaves),
+// then rolls, slowing at mu_roll g until it stops: read from its track alone (50 Hz, 1 mm of
+// noise), the slide's acceleration, the roll's deceleration and when the roll begins are the
+// closed form's (the accelerations within four of their standard errors, the start within a
+// step), for stun, follow and draw at several speeds, and the stretch lasts until the ball
+// stops. The standard errors are small enough to mean something: a tenth of the slide's
+// acceleration for a slide of 0.2 s or more (a quarter for a shorter one), 2 % of the roll's.
+TEST(ClothReadingTest, AStrikeOnEndlessClothSlidesThenRollsAsTheClosedFormSays) {
+  TableSpec spec = *MakeTablePreset("unbounded");
+  spec.params.mu_slide = 0.23;
+  spec.params.mu_roll = 0.015;
+  const TableModel m = *TableModel::Create(spec);
+  const double g = spec.params.gravity_mps2;
+  TableState one;
+  one.balls.push_back(Ball{.id = "cue", .r = Eigen::Vector3d(0, 0, m.radius())});
+  int seed = 0;
+  for (const double v0 : {2.0, 3.0, 4.0}) {
+    for (const double b : {-0.3, 0.0, 0.15}) {
+      CueStrike c;
+      c.ball_speed = true;
+      c.speed_mps = v0;
+      c.phi_rad = 0.4;
+      c.b = b;
+      TableState s = one;
+      ASSERT_TRUE(ApplyStrike(m, 0, c, 0, &s).ok());
+      const Ball& ball = s.balls[0];
+      // The slip at the cloth, v + w x (-R z): along the motion, its speed u0.
+      const Eigen::Vector3d slip = ball.v + ball.w.cross(Eigen::Vector3d(0, 0, -m.radius()));
+      const double u0 = slip.norm(), v = ball.v.norm();
+      const double slide_s = 2.0 * u0 / (7.0 * spec.params.mu_slide * g);
+      const double v_roll = v - spec.params.mu_slide * g * slide_s;
+      absl::StatusOr<Recording> rec = SyntheticRecording(
+          m, SolverOptions{}, one, 0, c,
+          SyntheticOptions{.noise_m = 1e-3, .seed = static_cast<uint64_t>(++seed)});
+      ASSERT_TRUE(rec.ok()) << rec.status();
+      const std::vector<TrackedStretch> stretches = TrackedStretches(*rec, 0);
+      ASSERT_FALSE(stretches.empty());
+      const TrackedStretch& st = stretches[0];
+      SCOPED_TRACE(::testing::Message() << "v0 " << v0 << ", b " << b << ", slide " << slide_s);
+      ASSERT_TRUE(st.slide_read && st.roll_read);
+      EXPECT_NEAR(st.roll_from_s, slide_s, 0.02);
+      EXPECT_NEAR(st.v_roll_mps, v_roll, 0.01 * v_roll);
+      EXPECT_LT(st.slide_se_mps2, (slide_s >= 0.2 ? 0.1 : 0.25) * spec.params.mu_slide * g);
+      EXPECT_NEAR(st.slide_mps2, spec.params.mu_slide * g, 4 * st.slide_se_mps2);
+      EXPECT_LT(st.roll_se_mps2, 0.02 * spec.params.mu_roll * g);
+      EXPECT_NEAR(st.roll_decel_mps2, spec.params.mu_roll * g, 4 * st.roll_se_mps2);
+      EXPECT_NEAR(st.roll_lateral_mps2, 0.0, 4 * st.roll_se_mps2);
+      // It rolls until it stops, v_roll / (mu_roll g) later: the stretch ends there.
+      EXPECT_NEAR(st.t1_s, slide_s + v_roll / (spec.params.mu_roll * g), 0.1);
+    }
+  }
+}
+
+// The cloth read from random three-ball shots on a carom table (50 Hz, 1 mm of noise, every
+// contact a stretch's end): the rolling resistance within 3 % and the sliding friction within
+// 8 % of the table's, whatever the cushion (the reading knows no model), with a tracker that
+// logs only some of the frames (uneven steps), and not a pool cloth's.
+TEST(ClothReadingTest, ReadClothFindsTheTablesClothFromItsTracks) {
+  TableSpec spec = Carom();
+  spec.params.mu_roll = 0.0045;
+  spec.params.mu_slide = 0.24;
+  for (const CushionModel cushion : {CushionModel::kHan, CushionModel::kMathavan2010}) {
+    spec.params.cushion_model = cushion;
+    const TableModel m = *TableModel::Create(spec);
+    std::vector<Recording> recs = Recordings(m, 10, 1e-3, 41);
+    const ClothReading c = ReadCloth(recs, spec.params.gravity_mps2);
+    SCOPED_TRACE(::testing::Message() << "cushion " << static_cast<int>(cushion));
+    EXPECT_GT(c.rolling, 20);
+    EXPECT_GT(c.sliding, 20);
+    EXPECT_NEAR(c.mu_roll, spec.params.mu_roll, 0.03 * spec.params.mu_roll);
+    EXPECT_NEAR(c.mu_slide, spec.params.mu_slide, 0.08 * spec.params.mu_slide);
+    EXPECT_LE(c.mu_roll_q1, c.mu_roll);
+    EXPECT_GE(c.mu_roll_q3, c.mu_roll);
+    // A tracker that drops a third of the frames at random.
+    std::mt19937_64 rng(5);
+    for (Recording& r : recs) {
+      std::vector<TrackPoint> kept;
+      for (const TrackPoint& p : r.track) {
+        if (std::uniform_real_distribution<double>(0, 1)(rng) > 1.0 / 3) kept.push_back(p);
+      }
+      r.track = std::move(kept);
+    }
+    const ClothReading uneven = ReadCloth(recs, spec.params.gravity_mps2);
+    EXPECT_NEAR(uneven.mu_roll, spec.params.mu_roll, 0.03 * spec.params.mu_roll);
+    EXPECT_NEAR(uneven.mu_slide, spec.params.mu_slide, 0.08 * spec.params.mu_slide);
+  }
+  const TableModel pool_cloth = *TableModel::Create(Carom());
+  const ClothReading pool = ReadCloth(Recordings(pool_cloth, 10, 1e-3, 41));
+  EXPECT_NEAR(pool.mu_roll, Carom().params.mu_roll, 0.03 * Carom().params.mu_roll);
+  EXPECT_GT(std::abs(pool.mu_roll - spec.params.mu_roll), 0.1 * spec.params.mu_roll);
+}
+
 // A recording played back with its own strike on its own table scores zero; another strike
 // or another table does not.
 TEST(CalibrateTest, ARecordingScoresZeroAgainstItsOwnShot) {
