@@ -199,6 +199,12 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     t.params.cue_end_mass_kg = 0.21 / 30;
     t.nose_fraction_of_diameter = 0.0;
     t.params.cushion_height_m = 0.037;
+    // The cloth of a match-size carom table, read from its tracks alone (ReadCloth): four
+    // public tracked shots (tailuge/billiards' history, SS_max_spin_02-06; docs/billiards.md,
+    // "The cloth read from the tracks") roll at 0.0047 (quartiles 0.0043-0.0052 over 17
+    // stretches) and slide at 0.175 (0.166-0.185 over 10), where pool cloth is 0.01 and 0.2.
+    t.params.mu_roll = 0.0047;
+    t.params.mu_slide = 0.175;
     BuildCaromTable(&t);
   } else if (name == "unbounded") {
     // The chapter's scene: an endless cloth, no cushions, no pockets.

@@ -1427,7 +1427,9 @@ TEST(StrongeCushionTest, OnTheNoseItIsHansContactWithSprings) {
 // (2840 x 1420 mm +-5 mm; balls 61-61.5 mm and 205-220 g; nose 37 mm +-1 mm); the cloth and
 // ball constants within the ranges of Alciatore's "typical values" FAQ (sliding friction
 // 0.15-0.4, rolling resistance 0.005-0.015, spin-down 5-15 rad/s^2, ball-ball restitution
-// 0.92-0.98, ball-cushion restitution 0.6-0.9).
+// 0.92-0.98, ball-cushion restitution 0.6-0.9), but for the measured tables' constants: the
+// snooker cushion (below) and the carom cloth, whose rolling resistance lies within the
+// quartiles a tracked carom table's stretches read.
 TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
   constexpr double kInch = 0.0254;
   struct Spec {
@@ -1461,8 +1463,10 @@ TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
     EXPECT_LE(p.cushion_height_m, s.nose_hi_m + 1e-12);
     EXPECT_GE(p.mu_slide, 0.15);
     EXPECT_LE(p.mu_slide, 0.4);
-    EXPECT_GE(p.mu_roll, 0.005);
-    EXPECT_LE(p.mu_roll, 0.015);
+    // The carom preset's cloth is a tracked carom table's (docs/billiards.md, "The cloth read
+    // from the tracks"), faster than the FAQ's pool cloth.
+    EXPECT_GE(p.mu_roll, s.preset == "carom" ? 0.0043 : 0.005);
+    EXPECT_LE(p.mu_roll, s.preset == "carom" ? 0.0052 : 0.015);
     EXPECT_GE(p.spin_decel_rps2, 5.0);
     EXPECT_LE(p.spin_decel_rps2, 15.0);
     EXPECT_GE(p.e_ball, 0.92);
