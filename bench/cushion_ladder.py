@@ -68,7 +68,7 @@ def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--study", default=os.path.join(ROOT, "build", "bin", "billiards_cushion_study"))
     parser.add_argument("--calibration", default=os.path.join(
-        ROOT, "bench", "results", "amd-epyc-2-cores", "billiards_calibration_study.csv"))
+        ROOT, "bench", "results", "amd-epyc-2-cores", "billiards_calibration_study-read-cloth-preset.csv"))
     parser.add_argument("--output", default=os.path.join(ROOT, "docs", "billiards-cushions.md"))
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()
