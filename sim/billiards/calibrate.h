@@ -269,8 +269,9 @@ std::vector<Rail> SimulatedRails(const TableSpec& spec, std::span<const Event> e
 /// its slip vanishes, then rolls, slowing at mu_roll g along its path. Both coordinates are
 /// fitted as that motion (position and velocity continuous where the roll begins, the time it
 /// begins chosen for the least residual), over a window grown point by point while the
-/// residuals stay within the tracker's noise (a chi-square bound at 5 standard deviations): a
-/// contact's jump in velocity ends it.
+/// residuals stay within the tracker's noise (the whole window's within a chi-square bound at
+/// 5 standard deviations, its newest five points' within their own): a contact's jump in
+/// velocity ends it.
 struct TrackedStretch {
   int ball = 0;
   double t0_s = 0.0, t1_s = 0.0;  ///< its first and last tracked points
@@ -288,10 +289,10 @@ struct TrackedStretch {
   /// tracker's noise (all nine coefficients fitted, when the roll begins among them).
   double slide_se_mps2 = 0.0, roll_se_mps2 = 0.0;
   /// The slide is read when it lasts 0.1 s and 6 points or more, its acceleration between
-  /// kSlidingMinAccel and kSlidingMaxAccel (sliding friction 0.08-0.6); the roll when it lasts 0.4 s
-  /// and 10 points or more, its acceleration at most kRollingMaxAccel (no cloth's rolling
-  /// resistance comes near; a slide's friction is ten times as much), slowing, and moving
-  /// (0.05 m/s or faster) where it begins.
+  /// kSlidingMinAccel and kSlidingMaxAccel (sliding friction 0.08-0.6); the roll when it
+  /// lasts 0.4 s and 10 points or more, its acceleration at most kRollingMaxAccel (no cloth's
+  /// rolling resistance comes near; a slide's friction is ten times as much), slowing, and
+  /// moving (0.05 m/s or faster) where it begins.
   bool slide_read = false, roll_read = false;
 };
 inline constexpr double kRollingMaxAccel = 0.5;
@@ -306,8 +307,9 @@ std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int bal
 
 /// What a set of recordings says of their cloth, read from every ball's stretches: the
 /// rolling resistance (a roll's deceleration over g) and the sliding friction (a slide's
-/// acceleration over g), each as the median and quartiles over the stretches (each stretch one measurement: the spread between them is the cloth's and the
-/// balls', far above a single fit's standard error). Zero where no stretch was found.
+/// acceleration over g), each as the median and quartiles over the stretches (each stretch one
+/// measurement: the spread between them is the cloth's and the balls', far above a single
+/// fit's standard error). Zero where no stretch was found.
 struct ClothReading {
   int rolling = 0, sliding = 0;  ///< stretches read
   double mu_roll = 0.0, mu_roll_q1 = 0.0, mu_roll_q3 = 0.0;
