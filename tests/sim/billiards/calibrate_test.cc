@@ -26,30 +26,26 @@ using ::testing::HasSubstr;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// The carom table with pool's cloth and the typical-values FAQ's cushion (sliding friction 0.2,
-// rolling resistance 0.01, spin-down 10, cushion 0.85 and 0.2): what these tests start from and
-// were measured with. The preset's own constants come from a tracked carom table (PresetTest).
-TableSpec Carom() {
+// The carom table with these cloth and cushion constants.
+TableSpec CaromWith(double mu_slide, double mu_roll, double spin_decel, double e_cushion,
+                    double f_cushion) {
   TableSpec s = *MakeTablePreset("carom");
-  s.params.mu_slide = 0.2;
-  s.params.mu_roll = 0.01;
-  s.params.spin_decel_rps2 = 10.0;
-  s.params.e_cushion = 0.85;
-  s.params.f_cushion = 0.2;
+  s.params.mu_slide = mu_slide;
+  s.params.mu_roll = mu_roll;
+  s.params.spin_decel_rps2 = spin_decel;
+  s.params.e_cushion = e_cushion;
+  s.params.f_cushion = f_cushion;
   return s;
 }
 
+// The carom table with pool's cloth and the typical-values FAQ's cushion: what these tests
+// start from and were measured with. The preset's own constants come from a tracked carom
+// table (PresetTest).
+TableSpec Carom() { return CaromWith(0.2, 0.01, 10.0, 0.85, 0.2); }
+
 // The carom table with other cloth and cushion constants: the "real" table the recordings
 // come from.
-TableSpec TrueTable() {
-  TableSpec s = Carom();
-  s.params.mu_slide = 0.26;
-  s.params.mu_roll = 0.0055;
-  s.params.spin_decel_rps2 = 7.5;
-  s.params.e_cushion = 0.9;
-  s.params.f_cushion = 0.15;
-  return s;
-}
+TableSpec TrueTable() { return CaromWith(0.26, 0.0055, 7.5, 0.9, 0.15); }
 
 // The carom table with Mathavan et al.'s measured cushion (their model and constants) and a
 // heated cloth's rolling resistance.
@@ -360,7 +356,9 @@ TEST(CalibrateTest, ShotsAreSmoothInTheStrike) {
       std::sort(moves.begin(), moves.end());
       if (cm == CushionModel::kMathavan2010) {
         EXPECT_LT(moves[15], 1e-11) << "median";
-        EXPECT_LT(moves.back(), preset ? 1e-6 : 1e-8) << "the largest";
+        // On the preset, the three creeping ones within a micron and no others beyond 1e-8.
+        EXPECT_LT(moves[preset ? 26 : 29], 1e-8) << "all but the creeping ones";
+        EXPECT_LT(moves.back(), 1e-6) << "the largest";
       } else {
         EXPECT_LT(moves.back(), 1e-10) << "model " << static_cast<int>(cm);
       }
