@@ -321,6 +321,55 @@ class MathavanRates {
     return d;
   }
 
+  // The jump in the state that changes contact j's slip by `change` at once: the friction
+  // impulse at j that makes the change, with the other contact's friction following its grip
+  // as it does per dP. Exact in the limit of a small change, whatever path the slip would take:
+  // the rates are affine in j's friction, so a slip s0 closing on zero and held there collects
+  // the friction impulse M^-1 s0 more than a slip held at s0 does (M the slip rate's response
+  // to j's friction), however its direction turns on the way. Both affine maps are read off at
+  // zero and at unit impulses. False (no jump) where j's friction cannot be set (no friction,
+  // or no load) or the other contact is at the edge (its friction would follow j's nonlinearly).
+  bool Jump(int j, const MathavanState& z, const Eigen::Vector2d& change,
+            MathavanState* jump) const {
+    const int o = 1 - j;
+    if ((*contact_)[o].grip == Grip::kEdge) return false;
+    Contacts free = *contact_;
+    free[j].grip = Grip::kSliding;  // its friction set, as a sliding contact's is by its direction
+    const MathavanRates r(*this, &free);
+    std::array<Eigen::Vector2d, 2> d;
+    d[o] = r.Direction(o, z);
+    const bool nose_stuck = (*contact_)[kNose].grip == Grip::kStuck;
+    const double load = st_ - ct_ * (nose_stuck ? 0.0 : -mw_ * d[kNose][1]);
+    if (j == kNose ? !(mw_ > 0.0) : !(ms_ > 0.0 && load > 0.0)) return false;
+    auto friction = [&](const Eigen::Vector2d& fj) {
+      std::array<Eigen::Vector2d, 2> dj = d;
+      if (j == kNose) {
+        dj[kNose] = -fj / mw_;
+      } else if (nose_stuck) {  // the stuck nose holds against the slate's friction fj
+        const double k = kw_ * radius_;
+        MathavanFriction f;
+        f << -(kv_ - st_ * k) * fj[0] / (kv_ + k),
+            (-kv_ * st_ * ct_ - (k - kv_ * st_) * fj[1]) / (kv_ * st_ * st_ + k), fj[0], fj[1];
+        return f;
+      } else {
+        dj[kSlate] = -fj / (ms_ * load);
+      }
+      return r.Solve(dj);
+    };
+    const MathavanState base = r.RatesOf(z, friction(Eigen::Vector2d::Zero()));
+    MathavanState per[2];
+    Eigen::Matrix2d response;
+    for (int k : {0, 1}) {
+      per[k] = r.RatesOf(z, friction(Eigen::Vector2d::Unit(k))) - base;
+      response.col(k) = Slip(j, per[k]);
+    }
+    if (!(std::abs(response.determinant()) > 0.0)) return false;
+    const Eigen::Vector2d impulse = response.inverse() * change;
+    *jump = impulse[0] * per[0] + impulse[1] * per[1];
+    (*jump)[5] = 0.0;  // the nose's normal work takes no impulse
+    return true;
+  }
+
  private:
   // A sliding contact's direction: its slip's; none within rounding of zero.
   Eigen::Vector2d Direction(int j, const MathavanState& z) const {
@@ -417,12 +466,17 @@ class MathavanRates {
 // cone; an edge slip grown large enough to slide), so it is integrated between them by Dormand
 // and Prince's 5(4) pair under error control (each step's error estimate within
 // kMathavanTolerance of the ball's speed, in velocity and R w). A sliding slip headed for zero
-// is stepped no further than where its present rate would bring it to zero, so it lands within
-// the tolerance of zero in a few steps instead of crossing it; a cone crossing is found inside
-// its step by false position, a phase end by Newton's method. Should the pair still fail (a
-// slip that creeps toward zero at the edge of sticking turns faster than it can step cheaply),
-// the steps fall to the finest, (1 + e) m v_n / cushion_impulse_steps, taken by the midpoint
-// rule; the pair is tried again after a number of fine steps that doubles while it fails.
+// is stepped no further than where its present rate would bring it to zero, and lands once
+// within `landing` of it: the rest of its way is taken at once (MathavanRates::Jump, the
+// friction impulse that closes it, exact to second order in the slip left however its
+// direction turns on the way, which near zero it does at a rate of order mu / |slip|, too fast
+// to step). A slip that cannot stick there passes through zero or by it: where its present
+// rate carries it within kMiss of zero it is first taken to that closest point, and leaves at
+// the edge; else it is stepped on. A cone crossing and an edge slip's growth to the hand-off
+// are found inside their step by false position, a phase end by Newton's method. Should the
+// pair still fail, the steps fall to the finest, (1 + e) m v_n / cushion_impulse_steps, taken
+// by the midpoint rule; the pair is tried again after a number of fine steps that doubles
+// while it fails.
 void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, double e,
                             double mu_cushion, double mu_slate, Ball* ball) {
   constexpr double kMathavanTolerance = 1e-8;
@@ -438,11 +492,18 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
   const MathavanRates rates(m, radius, model.cushion_sin(), mu_cushion, mu_slate, slip_floor,
                             &contacts);
   const double tol = kMathavanTolerance * speed;
-  // An edge contact's slip goes back to its own direction once 100 times the tolerance: small
-  // enough that the edge's direction has not drifted from the slip's (handed back at 1e-4 of
-  // the speed or below, a test impact's rebound stays within 2e-9 of the reference; at 1e-3,
-  // 7e-7), large enough that it does not land again at once.
-  const double hand_off = 1e-6 * speed;
+  // An edge contact's slip goes back to its own direction once 1e-4 of the speed: small enough
+  // that the edge's direction has not drifted from the slip's (handed back at 1e-3 a test
+  // impact's rebound was 2e-6 of the speed off its reference), large enough that the sliding
+  // slip is no longer stiff (handed back at 1e-6, a slip creeping away from zero at the edge of
+  // sticking stays within a few times that for much of the impact, and there its direction
+  // turns faster than the pair can step).
+  const double hand_off = 1e-4 * speed;
+  // A sliding slip closing on zero lands within this of it (MathavanRates::Jump). Landed from
+  // 1e-4, 1e-5 or 1e-6 of the speed, creeping impacts' rebounds agree within 1e-9 of the speed;
+  // the pair cannot always bring a turning slip much below 1e-6.
+  const double landing = 1e-5 * speed;
+  constexpr double kMiss = 1e-6;  // a reversal's miss of zero, over the speed (below)
   const double total = (1.0 + e) * m * z[1];  // the frictionless impact's impulse
   const double steps = p.cushion_impulse_steps;
   // The pair's steps may go down to 1/1000 of the fallback step: a small slip turns fast (at a
@@ -476,16 +537,19 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
     *k_out = rates(0.0, *out);
     return error_of(ode::Dp45Error(h, k1, stages, *k_out));
   };
-  // Contact j's slip is at zero at s: it sticks if its friction can hold it, and else grips at
-  // the edge (a slate slip that starts at zero keeps sliding: the rates' rounding rule).
-  auto settle = [&](int j, const MathavanState& s, bool start) {
+  // Contact j's slip is at zero: it sticks if its friction can hold it, and else grips at the
+  // edge (a slate slip that starts at zero keeps sliding: the rates' rounding rule). A slip
+  // that lands, near zero, is first taken the rest of its way (above).
+  auto settle = [&](int j, bool start) {
     SlipContact& c = contacts[j];
-    const bool holds = rates.Excess(j, rates.Held(j, s)) <= 0.0;
+    MathavanState jump;
+    if (!start && rates.Jump(j, z, c.offset - rates.Slip(j, z), &jump)) z += jump;
+    const bool holds = rates.Excess(j, rates.Held(j, z)) <= 0.0;
     if (!holds && start && j == kSlate) return;
-    c = {holds ? Grip::kStuck : Grip::kEdge, rates.Slip(j, s)};
+    c = {holds ? Grip::kStuck : Grip::kEdge, rates.Slip(j, z)};
   };
   for (int j : {kNose, kSlate}) {
-    if (rates.Slip(j, z).norm() <= slip_floor) settle(j, z, true);
+    if (rates.Slip(j, z).norm() <= slip_floor) settle(j, true);
   }
   MathavanState k1 = rates(0.0, z), next, k_next;
   // The held friction's excess over the cone: it changes sign where a stuck contact comes
@@ -493,28 +557,39 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
   auto held_excess = [&](int j, const MathavanState& s) {
     return rates.Excess(j, rates.Held(j, s));
   };
-  // The first cone crossing inside the step [0, h] from z: the step is cut to it (`end`,
-  // `k_end` and the error estimate remade there) and the contact returned; -1 if none.
+  // An edge slip's size over the hand-off: it rises through zero where the slip slides again.
+  auto grown = [&](int j, const MathavanState& s) {
+    return (rates.Slip(j, s) - contacts[j].offset).norm() - hand_off;
+  };
+  // The first switch inside the step [0, h] from z: a cone crossing, or an edge slip grown to
+  // the hand-off. The step is cut to it (`end`, `k_end` and the error estimate remade there)
+  // and the contact returned, with `hands_off` saying which kind; -1 if none.
   auto first_switch = [&](bool fine, double* h, MathavanState* end, MathavanState* k_end,
-                          double* err) {
+                          double* err, bool* hands_off) {
     int which = -1;
     for (int j : {kNose, kSlate}) {
       const Grip grip = contacts[j].grip;
       if (grip == Grip::kSliding) continue;
       // Oriented to rise through zero at the crossing: the excess for a stuck contact, its
-      // negative for an edge one.
+      // negative for an edge one; or an edge slip's growth.
       const double sign = grip == Grip::kStuck ? 1.0 : -1.0;
-      double fb = sign * held_excess(j, *end);
+      const bool growing = grip == Grip::kEdge && !(sign * held_excess(j, *end) > 0.0) &&
+                           grown(j, *end) > 0.0;
+      auto crossing = [&](const MathavanState& s) {
+        return growing ? grown(j, s) : sign * held_excess(j, s);
+      };
+      double fb = crossing(*end);
       if (!(fb > 0.0)) continue;
-      double a = 0.0, b = *h, fa = sign * held_excess(j, z);
+      double a = 0.0, b = *h, fa = crossing(z);
       if (fa > 0.0) b = 0.0;  // already across: the switch is at z
       MathavanState at_b = b > 0.0 ? *end : z, k_at_b = b > 0.0 ? *k_end : k1;
       double err_b = b > 0.0 ? *err : 0.0;
       int side = 0;  // Illinois' false position
-      for (int it = 0; it < 60 && b - a > 1e-15 * total; ++it) {
+      // A hand-off needs no precision: anywhere the slip is within twice the hand-off will do.
+      for (int it = 0; it < 60 && b - a > 1e-15 * total && !(growing && fb <= hand_off); ++it) {
         const double x = std::clamp(b - fb * (b - a) / (fb - fa), a, b);
         const double x_err = step(fine, x, k1, end, k_end);
-        const double fx = sign * held_excess(j, *end);
+        const double fx = crossing(*end);
         if (fx > 0.0) {
           b = x;
           fb = fx;
@@ -535,6 +610,7 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
       *k_end = k_at_b;
       *err = err_b;
       which = j;
+      *hands_off = growing;
     }
     return which;
   };
@@ -569,7 +645,8 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
     if (taken < h_min && ++small_steps > kSmallSteps) h_floor = h_min;
     const bool cut = taken < h;
     double err = step(fine, taken, k1, &next, &k_next);
-    const int switching = first_switch(fine, &taken, &next, &k_next, &err);
+    bool hands_off = false;
+    const int switching = first_switch(fine, &taken, &next, &k_next, &err, &hands_off);
     if (!fine && !(err <= tol)) {
       h = std::max(h_floor, taken * ode::Dp45StepFactor(err / tol, rejected));
       rejected = true;
@@ -605,7 +682,10 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
     z = next;
     k1 = k_next;
     bool changed = false;
-    if (switching >= 0) {  // a stuck contact comes to the edge; an edge contact sticks
+    if (switching >= 0 && hands_off) {  // an edge slip grown to the hand-off slides
+      contacts[switching].grip = Grip::kSliding;
+      changed = true;
+    } else if (switching >= 0) {  // a stuck contact comes to the edge; an edge contact sticks
       SlipContact& c = contacts[switching];
       c = {c.grip == Grip::kStuck ? Grip::kEdge : Grip::kStuck, rates.Slip(switching, z)};
       changed = true;
@@ -617,10 +697,26 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
       if (c.grip == Grip::kEdge && n > hand_off) {
         c.grip = Grip::kSliding;
         changed = true;
-      } else if (c.grip == Grip::kSliding && n <= tol &&
-                 (n <= slip_floor || rates.Slip(j, k1).dot(slip) < 0.0)) {
-        // A slip headed for zero, within the tolerance of it: landed.
-        settle(j, z, false);
+      } else if (c.grip == Grip::kSliding && n <= landing) {
+        // A slip headed for zero, near it, lands. One that can stick there does (its friction
+        // draws it in, whatever its direction). One that cannot passes through zero, or by
+        // it: where its present rate would carry it within kMiss of zero (a reversal) it is
+        // carried to that closest point, an Euler step whose error is second order in the
+        // slip, and the miss is closed by a jump; else (it swings by, its direction turning
+        // fast) it is stepped on, landing only within the tolerance.
+        // Where no jump can be made (the other contact at the edge), only within the tolerance.
+        const Eigen::Vector2d rate = rates.Slip(j, k1);
+        const double closing = -rate.dot(slip);
+        MathavanState unused;
+        if (n > slip_floor && !(closing > 0.0)) continue;
+        if (n > tol && !rates.Jump(j, z, -slip, &unused)) continue;
+        if (n > tol && held_excess(j, z) > 0.0) {
+          const double to_closest = closing / rate.squaredNorm();
+          if (!((slip + to_closest * rate).norm() <= kMiss * speed)) continue;
+          z += to_closest * k1;
+          k1 = rates(0.0, z);
+        }
+        settle(j, false);
         changed = true;
       }
     }

@@ -30,7 +30,7 @@ constexpr std::array<ParamInfo, 23> kParams = {{
     {"f_cushion", "", "ball-cushion friction coefficient f_c", &PhysicsParams::f_cushion, 0, 2},
     {"e_cushion_mathavan", "", "Mathavan 2010 cushion: energetic restitution at the nose", &PhysicsParams::e_cushion_mathavan, 0, 1},
     {"f_cushion_mathavan", "", "Mathavan 2010 cushion: ball-cushion sliding friction", &PhysicsParams::f_cushion_mathavan, 0, 2},
-    {"cushion_impulse_steps", "", "Mathavan 2010 cushion: the fallback's impulse step, 1/N of the impact (where a slip creeps)", &PhysicsParams::cushion_impulse_steps, 10, 100000},
+    {"cushion_impulse_steps", "", "Mathavan 2010 cushion: the fallback's impulse step, 1/N of the impact (where error control fails)", &PhysicsParams::cushion_impulse_steps, 10, 100000},
     {"cushion_poisson_ratio", "", "Stronge compliant cushion: Poisson ratio of the rubber (stiffness ratio)", &PhysicsParams::cushion_poisson_ratio, 0, 0.5},
     {"cushion_height_m", "m", "cushion nose height above the slate h (R < h < 2R)", &PhysicsParams::cushion_height_m, 0.005, 0.2},
     {"cue_mass_kg", "kg", "cue mass M", &PhysicsParams::cue_mass_kg, 0.05, 5},

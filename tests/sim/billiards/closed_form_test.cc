@@ -1278,6 +1278,46 @@ TEST(MathavanCushionTest, AStuckSlipIsHeldNotStepped) {
   }
 }
 
+// A slip that creeps to zero lands there at once. Near zero a sliding slip's direction turns at
+// a rate of order mu / |slip|; where its contact can hold it, it spirals in along a ray it
+// reaches only as a power of the shrinking slip, too stiff to step down to the tolerance. Landed
+// within 1e-5 of the speed, the rest of its way is taken as the friction impulse that closes
+// it (exact to second order, whatever the path). Four such impacts, three from lively shots on
+// the carom preset (its slate friction 0.175) and one on pool cloth (0.2), against the
+// reference's limit from 400,000 and 1,600,000 steps; they no longer reach the fallback's
+// fixed steps, so its step count changes nothing (they land within 3.1e-9 of the speed). The
+// fallback decided them before: 2.7e-4 to 6.5e-4 of the speed off the limit at its default 500
+// steps, its rebound moving by up to 1e-4 of the speed between 500 and 100,000 steps.
+TEST(MathavanCushionTest, ACreepingSlipLandsAtOnce) {
+  struct Approach {
+    Eigen::Vector3d v, w;
+    double mu_slate;
+  };
+  const Approach approaches[] = {
+      {{0.7757, 3.1477, 0.0}, {-80.60, 20.00, 51.63}, 0.175},
+      {{0.2899, 2.2509, 0.0}, {-24.80, 2.995, 30.25}, 0.175},
+      {{-0.3895, 2.3408, 0.0}, {-15.75, -2.888, 24.34}, 0.175},
+      {{0.72, 2.88, 0.0}, {-37.9, 9.4, 0.0}, 0.2},
+  };
+  for (const Approach& a : approaches) {
+    const TableModel model = MakeModel("carom", {}, CushionModel::kMathavan2010);
+    const double speed = a.v.norm() + model.radius() * a.w.norm();
+    const Eigen::Matrix<double, 5, 1> rebound =
+        Rebound(model, MathavanImpact(model, a.v, a.w, 0.98, 0.14, a.mu_slate));
+    const Eigen::Matrix<double, 5, 1> limit =
+        (4.0 * MathavanReference(model, a.v, a.w, 0.98, 0.14, a.mu_slate, 1600000) -
+         MathavanReference(model, a.v, a.w, 0.98, 0.14, a.mu_slate, 400000)) / 3.0;
+    EXPECT_LT((rebound - limit).cwiseAbs().maxCoeff(), 1e-8 * speed)
+        << "v " << a.v.transpose() << ", w " << a.w.transpose();
+    for (double steps : {250.0, 2000.0}) {
+      const TableModel other =
+          MakeModel("carom", {{"cushion_impulse_steps", steps}}, CushionModel::kMathavan2010);
+      EXPECT_EQ(Rebound(other, MathavanImpact(other, a.v, a.w, 0.98, 0.14, a.mu_slate)), rebound)
+          << steps << " steps; v " << a.v.transpose() << ", w " << a.w.transpose();
+    }
+  }
+}
+
 // On a table, in both engines, with every model but the mirror: a ball sent into the top rail
 // at 45 deg rebounds away from it, slower (the impact is the same function in each engine).
 TEST_P(ClosedFormTest, EveryCushionModelBouncesInBothEngines) {
