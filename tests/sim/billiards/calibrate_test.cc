@@ -26,7 +26,8 @@ using ::testing::HasSubstr;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// The carom table with these cloth and cushion constants.
+// The carom table with these cloth and cushion constants, and Mathavan's cushion (when
+// chosen) with the constants of the paper.
 TableSpec CaromWith(double mu_slide, double mu_roll, double spin_decel, double e_cushion,
                     double f_cushion) {
   TableSpec s = *MakeTablePreset("carom");
@@ -35,6 +36,8 @@ TableSpec CaromWith(double mu_slide, double mu_roll, double spin_decel, double e
   s.params.spin_decel_rps2 = spin_decel;
   s.params.e_cushion = e_cushion;
   s.params.f_cushion = f_cushion;
+  s.params.e_cushion_mathavan = 0.98;
+  s.params.f_cushion_mathavan = 0.14;
   return s;
 }
 

@@ -1521,6 +1521,14 @@ TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
     if (s.preset == "carom") {
       EXPECT_GE(p.e_cushion, 0.86);
       EXPECT_LE(p.e_cushion, 0.88);
+      // Mathavan's cushion, calibrated on the same shots (0.877-0.901 and 0.199-0.200).
+      EXPECT_GE(p.e_cushion_mathavan, 0.87);
+      EXPECT_LE(p.e_cushion_mathavan, 0.91);
+      EXPECT_GE(p.f_cushion_mathavan, 0.19);
+      EXPECT_LE(p.f_cushion_mathavan, 0.21);
+    } else {  // the constants Mathavan et al. fitted to their snooker cushion
+      EXPECT_EQ(p.e_cushion_mathavan, 0.98);
+      EXPECT_EQ(p.f_cushion_mathavan, 0.14);
     }
   }
 }
