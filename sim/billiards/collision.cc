@@ -703,8 +703,8 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
         // it: where its present rate would carry it within kMiss of zero (a reversal) it is
         // carried to that closest point, an Euler step whose error is second order in the
         // slip, and the miss is closed by a jump; else (it swings by, its direction turning
-        // fast) it is stepped on, landing only within the tolerance.
-        // Where no jump can be made (the other contact at the edge), only within the tolerance.
+        // fast) it is stepped on, landing only within the tolerance. So is one for which no
+        // jump can be made (the other contact at the edge).
         const Eigen::Vector2d rate = rates.Slip(j, k1);
         const double closing = -rate.dot(slip);
         MathavanState unused;
