@@ -507,10 +507,14 @@ void CollideCushionMathavan(const TableModel& model, const Eigen::Vector3d& nh, 
   const double total = (1.0 + e) * m * z[1];  // the frictionless impact's impulse
   const double steps = p.cushion_impulse_steps;
   // The pair's steps may go down to 1/1000 of the fallback step: a small slip turns fast (at a
-  // rate of order mu / |slip|), and a slip that passes close by zero, or creeps toward it, needs
-  // steps of the order of its size. Creeping is slow; after kSmallSteps steps shorter than the
-  // fallback step the pair's floor goes back up to it, and so to the fallback below it.
-  constexpr int kSmallSteps = 200;
+  // rate of order mu / |slip|), and a slip that passes close by zero, or creeps near it, needs
+  // steps of the order of its size. After kSmallSteps steps shorter than the fallback step the
+  // pair's floor goes back up to it, and so to the fallback below it. A slip creeping just
+  // above the landing while its holding friction crosses the cone's edge (it neither lands nor
+  // leaves) takes a few hundred such steps: with 200, 6 of 60,000 random impacts fell to the
+  // fallback, its step count moving their rebounds by up to 1e-4 of the speed; with 2000 none
+  // does, each within 1e-7 of the reference, and the mean cost is the same.
+  constexpr int kSmallSteps = 2000;
   const double h_min = total / steps, h_max = 0.5 * total;
   double h_floor = 1e-3 * h_min;
   int small_steps = 0;
