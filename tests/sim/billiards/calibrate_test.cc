@@ -356,12 +356,8 @@ TEST(CalibrateTest, ShotsAreSmoothInTheStrike) {
         moves.push_back(move);
       }
       std::sort(moves.begin(), moves.end());
-      if (cm == CushionModel::kMathavan2010) {
-        EXPECT_LT(moves[15], 1e-11) << "median";
-        EXPECT_LT(moves.back(), 1e-10) << "the largest";
-      } else {
-        EXPECT_LT(moves.back(), 1e-10) << "model " << static_cast<int>(cm);
-      }
+      EXPECT_LT(moves[15], 1e-11) << "median, model " << static_cast<int>(cm);
+      EXPECT_LT(moves.back(), 1e-10) << "the largest, model " << static_cast<int>(cm);
     }
   }
 }

@@ -1299,8 +1299,8 @@ TEST(MathavanCushionTest, ACreepingSlipLandsAtOnce) {
       {{-0.3895, 2.3408, 0.0}, {-15.75, -2.888, 24.34}, 0.175},
       {{0.72, 2.88, 0.0}, {-37.9, 9.4, 0.0}, 0.2},
   };
+  const TableModel model = MakeModel("carom", {}, CushionModel::kMathavan2010);
   for (const Approach& a : approaches) {
-    const TableModel model = MakeModel("carom", {}, CushionModel::kMathavan2010);
     const double speed = a.v.norm() + model.radius() * a.w.norm();
     const Eigen::Matrix<double, 5, 1> rebound =
         Rebound(model, MathavanImpact(model, a.v, a.w, 0.98, 0.14, a.mu_slate));
