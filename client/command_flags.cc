@@ -269,6 +269,8 @@ std::vector<CommandSpec> MakeSpecs() {
               {"cue_ball", "the struck ball in every file (default: the first to depart from "
                            "its spot)"},
               {"fit_elevation", "fit the cue's elevation too (default level)"},
+              {"read_cloth", "read the cloth (mu_roll, mu_slide) from the training shots' "
+                             "tracks and start from it"},
               {"huber", "Huber's scale in metres, [0, 1]: false detections pull the fit as "
                         "hard as a point this far (default: squared distances)"},
               {"track_origin", "where the files' (0, 0) is: centre (default, the table frame) "

@@ -1,4 +1,5 @@
 // `sportsim table ...`: authoritative tables (Billiards/CreateTable ... WatchTable).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -86,6 +87,9 @@ ABSL_FLAG(std::string, cue_ball, "",
           "table calibrate: the struck ball in every file (default: the first ball to depart "
           "from its spot)");
 ABSL_FLAG(bool, fit_elevation, false, "table calibrate: fit the cue's elevation too");
+ABSL_FLAG(bool, read_cloth, false,
+          "table calibrate: read the cloth (rolling resistance, sliding friction) from the "
+          "training shots' tracks and start from it");
 ABSL_FLAG(std::optional<double>, huber, std::nullopt,
           "table calibrate: Huber's scale in metres, [0, 1], for trackers' false detections "
           "(default: squared distances)");
@@ -762,6 +766,7 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   if (const auto n = absl::GetFlag(FLAGS_max_iterations)) request.set_max_iterations(*n);
   if (const auto n = absl::GetFlag(FLAGS_max_simulations)) request.set_max_simulations(*n);
   request.set_fit_elevation(absl::GetFlag(FLAGS_fit_elevation));
+  request.set_read_cloth(absl::GetFlag(FLAGS_read_cloth));
   if (const auto h = absl::GetFlag(FLAGS_huber)) request.set_huber_m(*h);
   const std::string cue = absl::GetFlag(FLAGS_cue_ball);
   for (const std::string& path : args) {
@@ -852,6 +857,23 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   if (!have_report) return ReportRpcError(grpc::Status(grpc::StatusCode::INTERNAL, "no report"));
   const v1::CalibrationReport& rep = last.report();
   return Print(ctx, rep, [&] {
+    if (rep.has_cloth()) {
+      // What the tracks say of the cloth, and what the calibration started from.
+      const v1::ClothReading& c = rep.cloth();
+      std::cout << absl::StrFormat("%-22s %12s %12s %9s   %s\n", "cloth read", "table", "read",
+                                   "stretches", "(median, quartiles)");
+      const auto line = [](std::string_view name, double before, double read, double q1,
+                           double q3, uint32_t n, bool taken) {
+        std::cout << absl::StrFormat("%-22s %12.6g %12s %9d   %s\n", name, before,
+                                     n == 0 ? std::string("-") : absl::StrFormat("%.6g", read), n,
+                                     taken ? absl::StrFormat("%.4g-%.4g", q1, q3)
+                                           : std::string("too few stretches: not taken"));
+      };
+      line("mu_roll", c.mu_roll_before(), c.mu_roll(), c.mu_roll_q1(), c.mu_roll_q3(),
+           c.rolling_stretches(), c.mu_roll_taken());
+      line("mu_slide", c.mu_slide_before(), c.mu_slide(), c.mu_slide_q1(), c.mu_slide_q3(),
+           c.sliding_stretches(), c.mu_slide_taken());
+    }
     std::cout << absl::StrFormat("%-22s %12s %12s %12s   bounds\n", "parameter", "before", "after",
                                  "std error");
     for (const v1::FittedParameter& p : rep.fitted()) {
@@ -882,9 +904,18 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
                                    rep.start_rms_m_size(), 1e3 * rep.start_rms_m(0), 1e3 * rep.start_rms_m(1));
     }
     std::cout << "\n";
+    // Every parameter the report's table has moved: the fitted ones and the cloth read.
     std::string flags;
+    std::vector<std::string> names;
+    for (const auto& [name, value] : rep.params()) names.push_back(name);
+    std::sort(names.begin(), names.end());
     for (const v1::FittedParameter& p : rep.fitted()) {
       flags += absl::StrFormat(" --param %s=%.6g", p.name(), p.after());
+    }
+    for (const std::string& name : names) {
+      bool fitted = false;
+      for (const v1::FittedParameter& p : rep.fitted()) fitted = fitted || p.name() == name;
+      if (!fitted) flags += absl::StrFormat(" --param %s=%.6g", name, rep.params().at(name));
     }
     if (!flags.empty()) std::cout << "use:" << flags << "\n";
   });

@@ -216,6 +216,7 @@ absl::StatusOr<CalibrationJob> CalibrationJobFromProto(const v1::CalibrateTableR
   }
   o.strike_bounds.fit_elevation = request.fit_elevation();
   o.huber_m = request.huber_m();  // checked with the rest below
+  o.read_cloth = request.read_cloth();
   // The options against the table and shots: parameter names and bounds.
   if (absl::Status s = b::ValidateCalibration(job.spec, job.solver, job.recordings, o); !s.ok()) {
     std::string message(s.message());
@@ -262,6 +263,28 @@ void CalibrationReportToProto(const CalibrationJob& job, const b::CalibrationRep
   out->set_simulations(report.simulations);
   for (double d : report.start_rms_m) out->add_start_rms_m(d);
   out->set_start_kept(static_cast<uint32_t>(report.start_kept));
+  if (report.cloth) {
+    const b::ClothTaken& c = *report.cloth;
+    v1::ClothReading* r = out->mutable_cloth();
+    r->set_rolling_stretches(static_cast<uint32_t>(c.reading.rolling));
+    r->set_sliding_stretches(static_cast<uint32_t>(c.reading.sliding));
+    r->set_mu_roll(c.reading.mu_roll);
+    r->set_mu_roll_q1(c.reading.mu_roll_q1);
+    r->set_mu_roll_q3(c.reading.mu_roll_q3);
+    r->set_mu_slide(c.reading.mu_slide);
+    r->set_mu_slide_q1(c.reading.mu_slide_q1);
+    r->set_mu_slide_q3(c.reading.mu_slide_q3);
+    r->set_mu_roll_taken(c.mu_roll_taken);
+    r->set_mu_slide_taken(c.mu_slide_taken);
+    r->set_mu_roll_before(c.mu_roll_before);
+    r->set_mu_slide_before(c.mu_slide_before);
+    r->set_mu_roll_start(c.mu_roll);
+    r->set_mu_slide_start(c.mu_slide);
+    // The table the report describes takes the read constants too (a fitted one is there
+    // already, at its fitted value).
+    if (c.mu_roll_taken) out->mutable_params()->insert({"mu_roll", report.params.mu_roll});
+    if (c.mu_slide_taken) out->mutable_params()->insert({"mu_slide", report.params.mu_slide});
+  }
 }
 
 }  // namespace sportsim::server

@@ -1010,9 +1010,18 @@ std::vector<double> StandardErrorsU(const Eigen::MatrixXd& j, const VectorXd& r,
   return out;
 }
 
-absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverOptions& solver,
-                                            std::span<const Recording> recordings,
-                                            const CalibrationOptions& options) {
+namespace {
+
+ClothTaken TakeCloth(const TableSpec& spec, const std::vector<Fitted>& fitted,
+                     const ClothReading& reading);
+absl::StatusOr<ClothReading> ReadClothOf(std::span<const Recording> recordings,
+                                         const std::vector<bool>& skip, double gravity_mps2,
+                                         const std::function<bool()>& cancelled);
+
+// The calibration from `spec` as given (Calibrate reads the cloth first when asked).
+absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const SolverOptions& solver,
+                                                std::span<const Recording> recordings,
+                                                const CalibrationOptions& options) {
   absl::StatusOr<Prepared> prepared = Prepare(spec, solver, recordings, options);
   if (!prepared.ok()) return prepared.status();
   const TableModel* model0 = &prepared->model0;
@@ -1517,6 +1526,35 @@ absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverO
   return report;
 }
 
+}  // namespace
+
+absl::StatusOr<CalibrationReport> Calibrate(const TableSpec& spec, const SolverOptions& solver,
+                                            std::span<const Recording> recordings,
+                                            const CalibrationOptions& options) {
+  if (!options.read_cloth) return CalibrateFrom(spec, solver, recordings, options);
+  // The inputs are checked on the table as given, before anything is read.
+  absl::StatusOr<Prepared> prepared = Prepare(spec, solver, recordings, options);
+  if (!prepared.ok()) return prepared.status();
+  if (options.progress) options.progress(0.0, "reading the cloth");
+  absl::StatusOr<ClothReading> reading = ReadClothOf(
+      recordings, prepared->heldout, spec.params.gravity_mps2, options.cancelled);
+  if (!reading.ok()) return reading.status();
+  const ClothTaken taken = TakeCloth(spec, prepared->fitted, *reading);
+  if (!taken.mu_roll_taken && !taken.mu_slide_taken) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "read_cloth: the training shots' tracks show %d rolling and %d sliding stretches; a "
+        "cloth constant needs %d",
+        reading->rolling, reading->sliding, kClothMinStretches));
+  }
+  TableSpec read = spec;
+  if (taken.mu_roll_taken) read.params.mu_roll = taken.mu_roll;
+  if (taken.mu_slide_taken) read.params.mu_slide = taken.mu_slide;
+  absl::StatusOr<CalibrationReport> report = CalibrateFrom(read, solver, recordings, options);
+  if (!report.ok()) return report.status();
+  report->cloth = taken;
+  return report;
+}
+
 namespace {
 
 // How far a point is from a rail's line, towards the table's inside.
@@ -1947,17 +1985,21 @@ double Quantile(std::vector<double> v, double q) {
   return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
-}  // namespace
-
-std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int ball) {
-  if (ball < 0 || ball >= static_cast<int>(recording.initial.balls.size())) return {};
+// TrackedStretches, polling `cancelled` (may be null) before each window: nullopt when it
+// says so.
+std::optional<std::vector<TrackedStretch>> StretchesOf(const Recording& recording, int ball,
+                                                       const std::function<bool()>* cancelled) {
+  if (ball < 0 || ball >= static_cast<int>(recording.initial.balls.size())) {
+    return std::vector<TrackedStretch>{};
+  }
   const BallTrack b = TrackOf(recording, ball);
   const int n = static_cast<int>(b.t.size());
-  if (n < kStretchMinPoints) return {};
+  if (n < kStretchMinPoints) return std::vector<TrackedStretch>{};
   const double sigma = UnevenNoise(b);
   std::vector<TrackedStretch> out;
   int i = 0;
   while (i + kStretchMinPoints <= n) {
+    if (cancelled != nullptr && (*cancelled)()) return std::nullopt;
     double c = 0.0;
     const int k = GrowStretch(b, i, sigma, &c);
     if (k < 0) {
@@ -1970,11 +2012,32 @@ std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int bal
   return out;
 }
 
+}  // namespace
+
+std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int ball) {
+  return *StretchesOf(recording, ball, nullptr);
+}
+
 ClothReading ReadCloth(std::span<const Recording> recordings, double gravity_mps2) {
+  return *ReadClothOf(recordings, {}, gravity_mps2, {});
+}
+
+namespace {
+
+// ReadCloth over the recordings not skipped (skip[i]; none when `skip` is empty), polling
+// `cancelled` (may be empty) between windows: Cancelled when it says so.
+absl::StatusOr<ClothReading> ReadClothOf(std::span<const Recording> recordings,
+                                         const std::vector<bool>& skip, double gravity_mps2,
+                                         const std::function<bool()>& cancelled) {
   std::vector<double> roll, slide;
-  for (const Recording& rec : recordings) {
+  for (size_t i = 0; i < recordings.size(); ++i) {
+    if (i < skip.size() && skip[i]) continue;
+    const Recording& rec = recordings[i];
     for (int ball = 0; ball < static_cast<int>(rec.initial.balls.size()); ++ball) {
-      for (const TrackedStretch& s : TrackedStretches(rec, ball)) {
+      std::optional<std::vector<TrackedStretch>> stretches =
+          StretchesOf(rec, ball, cancelled ? &cancelled : nullptr);
+      if (!stretches) return absl::CancelledError("calibration cancelled");
+      for (const TrackedStretch& s : *stretches) {
         if (s.roll_read) roll.push_back(s.roll_decel_mps2 / gravity_mps2);
         if (s.slide_read) slide.push_back(s.slide_mps2 / gravity_mps2);
       }
@@ -1991,6 +2054,37 @@ ClothReading ReadCloth(std::span<const Recording> recordings, double gravity_mps
   r.mu_slide_q3 = Quantile(slide, 0.75);
   return r;
 }
+
+// Each constant read by enough stretches is taken, within its bounds where it is fitted (a
+// fit must start inside them) and its allowed range otherwise.
+ClothTaken TakeCloth(const TableSpec& spec, const std::vector<Fitted>& fitted,
+                     const ClothReading& reading) {
+  ClothTaken t{.reading = reading,
+               .mu_roll_before = spec.params.mu_roll,
+               .mu_slide_before = spec.params.mu_slide,
+               .mu_roll = spec.params.mu_roll,
+               .mu_slide = spec.params.mu_slide};
+  const auto within = [&](double PhysicsParams::*field, double v) {
+    for (const Fitted& f : fitted) {
+      if (f.info->field == field) return std::clamp(v, f.lo, f.hi);
+    }
+    for (const ParamInfo& i : ParamInfos()) {
+      if (i.field == field) return std::clamp(v, i.lo, i.hi);
+    }
+    return v;
+  };
+  if (reading.rolling >= kClothMinStretches) {
+    t.mu_roll_taken = true;
+    t.mu_roll = within(&PhysicsParams::mu_roll, reading.mu_roll);
+  }
+  if (reading.sliding >= kClothMinStretches) {
+    t.mu_slide_taken = true;
+    t.mu_slide = within(&PhysicsParams::mu_slide, reading.mu_slide);
+  }
+  return t;
+}
+
+}  // namespace
 
 absl::StatusOr<Recording> SyntheticRecording(const TableModel& model, const SolverOptions& solver,
                                              const TableState& initial, int cue,

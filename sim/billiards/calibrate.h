@@ -177,6 +177,12 @@ struct CalibrationOptions {
   /// tracker's noise and below the model's error (2 cm, say) makes the fit robust to false
   /// detections; the reports' distances are the plain ones either way.
   double huber_m = 0.0;
+  /// Read the cloth from the training shots' tracks first (ReadCloth, no model of the table)
+  /// and start from it: the rolling resistance and the sliding friction each replace the
+  /// table's where at least kClothMinStretches stretches read it, as a given parameter would
+  /// (everything "before" is scored on it; a fitted one starts there, within its bounds).
+  /// InvalidArgument when neither is read. Held-out shots are not read.
+  bool read_cloth = false;
   std::function<bool()> cancelled;  ///< polled between simulations: Cancelled
   /// Called as the calibration goes: the fraction done (0..1) and the stage's name.
   std::function<void(double, std::string_view)> progress;
@@ -208,6 +214,31 @@ struct ParamReport {
   bool at_bound = false;
 };
 
+/// What a set of recordings says of their cloth, read from every ball's stretches (ReadCloth,
+/// below): the rolling resistance (a roll's deceleration over g) and the sliding friction (a
+/// slide's acceleration over g), each as the median and quartiles over the stretches (each
+/// stretch one measurement: the spread between them is the cloth's and the balls', far above a
+/// single fit's standard error). Zero where no stretch was found.
+struct ClothReading {
+  int rolling = 0, sliding = 0;  ///< stretches read
+  double mu_roll = 0.0, mu_roll_q1 = 0.0, mu_roll_q3 = 0.0;
+  double mu_slide = 0.0, mu_slide_q1 = 0.0, mu_slide_q3 = 0.0;
+};
+
+/// The fewest stretches a calibration takes a cloth constant from (CalibrationOptions::
+/// read_cloth): fewer, and one odd stretch (a ball grazing another unseen) is the median.
+inline constexpr int kClothMinStretches = 3;
+
+/// What CalibrationOptions::read_cloth read and took: the table's values before it beside the
+/// reading, and which of the two constants replaced them.
+struct ClothTaken {
+  ClothReading reading;
+  double mu_roll_before = 0.0, mu_slide_before = 0.0;
+  bool mu_roll_taken = false, mu_slide_taken = false;
+  /// The values taken (the reading's medians, within a fitted constant's bounds).
+  double mu_roll = 0.0, mu_slide = 0.0;
+};
+
 struct CalibrationReport {
   PhysicsParams params;              ///< the fitted parameters (the model's, the fitted ones moved)
   std::vector<ParamReport> fitted;   ///< in CalibrationOptions::params order
@@ -226,6 +257,8 @@ struct CalibrationReport {
   /// fitted jointly (strikes alone).
   std::vector<double> start_rms_m;
   int start_kept = 0;  ///< the start whose fit was kept (1 or 2; 0 with no joint fit)
+  /// With read_cloth: the reading of the training shots' tracks and what it replaced.
+  std::optional<ClothTaken> cloth;
 };
 
 /// Checks a calibration's inputs as Calibrate does before any work (the model, the solver,
@@ -305,16 +338,7 @@ inline constexpr double kSlidingMaxAccel = 6.0;
 /// holds for the uneven steps trackers give (many log a ball only when it has moved).
 std::vector<TrackedStretch> TrackedStretches(const Recording& recording, int ball);
 
-/// What a set of recordings says of their cloth, read from every ball's stretches: the
-/// rolling resistance (a roll's deceleration over g) and the sliding friction (a slide's
-/// acceleration over g), each as the median and quartiles over the stretches (each stretch one
-/// measurement: the spread between them is the cloth's and the balls', far above a single
-/// fit's standard error). Zero where no stretch was found.
-struct ClothReading {
-  int rolling = 0, sliding = 0;  ///< stretches read
-  double mu_roll = 0.0, mu_roll_q1 = 0.0, mu_roll_q3 = 0.0;
-  double mu_slide = 0.0, mu_slide_q1 = 0.0, mu_slide_q3 = 0.0;
-};
+/// What a set of recordings says of their cloth (ClothReading, above).
 ClothReading ReadCloth(std::span<const Recording> recordings, double gravity_mps2 = 9.81);
 
 /// A synthetic recording: `strike` played on `initial` under `model` at strike_time_s on the

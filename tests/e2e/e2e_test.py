@@ -1798,6 +1798,29 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 3, r.stderr)
         self.assertIn("huber_m must be in [0, 1] m", r.stderr)
 
+    def test_read_cloth_takes_the_cloth_from_the_tracks(self):
+        # --read-cloth reads the files' cloth with no model of the table: the tracks' rolling
+        # resistance (0.006) and the preset's sliding friction they were made with, taken for
+        # the preset's before the strikes are fitted, in the text, the json and the `use:` line.
+        r = cli(self.server.address, "--format", "json", "table", "calibrate", *self.files,
+                "--table", "carom", "--read-cloth")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        report = json.loads(r.stdout)
+        cloth = report["cloth"]
+        self.assertAlmostEqual(cloth["mu_roll"], 0.006, delta=1e-6)
+        self.assertAlmostEqual(cloth["mu_slide"], 0.175, delta=1e-5)
+        self.assertGreaterEqual(cloth["rolling_stretches"], 3)
+        self.assertIs(cloth["mu_roll_taken"], True)
+        self.assertEqual(cloth["mu_roll_before"], 0.0047)  # the carom preset's
+        self.assertEqual(report["params"]["mu_roll"], cloth["mu_roll"])
+        for shot in report["shots"]:
+            self.assertLess(shot["before"]["mean_m"], 1e-3)  # scored on the read cloth
+        r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
+                "--read-cloth")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("cloth read", r.stdout)
+        self.assertRegex(r.stdout, r"use: --param mu_roll=0\.006 --param mu_slide=0\.175")
+
     def test_a_server_with_the_default_request_limit_calibrates_uploaded_shots(self):
         # The two recordings are larger than one request may be by default (64 KiB); the CLI
         # uploads them in parts (UploadCalibration), and the report is the one a server with

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 
 #include <google/protobuf/util/field_comparator.h>
 #include <google/protobuf/util/message_differencer.h>
@@ -54,6 +55,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   FUZZ_CHECK(model.ok(), "the job's table does not build: %s", model.status().ToString().c_str());
   FUZZ_CHECK(billiards::ValidateCalibration(job->spec, job->solver, job->recordings, job->options).ok(),
              "an accepted job does not validate");
+  // The cloth read from the first recording's tracks (read_cloth), on tracks of a few thousand
+  // points (its cost is linear in them): counts and readings finite, each median between its
+  // quartiles, the readings within what a stretch reads.
+  if (const billiards::Recording& first = job->recordings.front(); first.track.size() <= 4000) {
+    const billiards::ClothReading c = billiards::ReadCloth(
+        std::span<const billiards::Recording>(&first, 1), job->spec.params.gravity_mps2);
+    FUZZ_CHECK(c.rolling >= 0 && c.sliding >= 0, "negative stretch counts");
+    FUZZ_CHECK(std::isfinite(c.mu_roll) && std::isfinite(c.mu_slide), "a reading not finite");
+    FUZZ_CHECK(c.mu_roll_q1 <= c.mu_roll && c.mu_roll <= c.mu_roll_q3 &&
+                   c.mu_slide_q1 <= c.mu_slide && c.mu_slide <= c.mu_slide_q3,
+               "a median outside its quartiles");
+    const double g = job->spec.params.gravity_mps2;
+    FUZZ_CHECK(c.mu_roll >= 0 && c.mu_roll <= billiards::kRollingMaxAccel / g + 1e-12 &&
+                   (c.sliding == 0 || (c.mu_slide >= billiards::kSlidingMinAccel / g - 1e-12 &&
+                                       c.mu_slide <= billiards::kSlidingMaxAccel / g + 1e-12)),
+               "a reading outside what a stretch reads: %g, %g", c.mu_roll, c.mu_slide);
+  }
   // Scored on the event engine only, whose cost is per event (capped below): a stepped engine
   // at a microsecond step would spend the fuzzer's per-input time limit on one input (the
   // server holds such a request to its CPU budget).

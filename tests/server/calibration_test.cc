@@ -344,6 +344,76 @@ TEST_F(CalibrationTest, HubersLossFitsThroughFalseDetections) {
             10 * std::abs(robust.params().at("mu_roll") - 0.006));
 }
 
+// read_cloth: the cloth read from the tracks (three shots, a millimetre of a tracker's noise)
+// is the table's, taken for the preset's before the strikes are fitted, reported with its
+// stretches and in the report's params, and the offline calibration's bit for bit; tracks too
+// short to read are refused naming the option, and nothing runs.
+TEST_F(CalibrationTest, ReadsTheClothFromTheTracks) {
+  Start();
+  v1::CalibrateTableRequest req = Request();
+  *req.add_shots() = Record(0.2, 0.5, -70, 3.5, 0.1);
+  req.clear_fit();
+  uint64_t state = 12345;
+  auto noise = [&] {  // a deterministic millimetre: the sum of twelve uniforms less six
+    double sum = 0;
+    for (int k = 0; k < 12; ++k) {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      sum += static_cast<double>(state >> 11) * 0x1.0p-53;
+    }
+    return 1e-3 * (sum - 6.0);
+  };
+  for (v1::RecordedShot& shot : *req.mutable_shots()) {
+    for (v1::TrackedPoint& p : *shot.mutable_points()) {
+      p.set_x_m(p.x_m() + noise());
+      p.set_y_m(p.y_m() + noise());
+    }
+  }
+  req.set_read_cloth(true);
+  std::vector<v1::CalibrateTableResponse> msgs;
+  grpc::Status st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  const v1::CalibrationReport& rep = msgs.back().report();
+  ASSERT_TRUE(rep.has_cloth());
+  const v1::ClothReading& c = rep.cloth();
+  EXPECT_TRUE(c.mu_roll_taken());
+  EXPECT_GE(c.rolling_stretches(), 3u);
+  EXPECT_NEAR(c.mu_roll(), 0.006, 0.03 * 0.006);
+  EXPECT_LE(c.mu_roll_q1(), c.mu_roll());
+  EXPECT_GE(c.mu_roll_q3(), c.mu_roll());
+  EXPECT_EQ(c.mu_roll_before(), 0.0047);  // the carom preset's
+  EXPECT_EQ(c.mu_roll_start(), c.mu_roll());
+  EXPECT_EQ(rep.params().at("mu_roll"), c.mu_roll());
+  EXPECT_EQ(rep.fitted_size(), 0);
+  if (c.mu_slide_taken()) {
+    EXPECT_EQ(rep.params().at("mu_slide"), c.mu_slide_start());
+  } else {
+    EXPECT_EQ(rep.params().count("mu_slide"), 0u);
+  }
+  absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(req);
+  ASSERT_TRUE(job.ok()) << job.status();
+  absl::StatusOr<billiards::CalibrationReport> offline =
+      billiards::Calibrate(job->spec, job->solver, job->recordings, job->options);
+  ASSERT_TRUE(offline.ok()) << offline.status();
+  ASSERT_TRUE(offline->cloth.has_value());
+  EXPECT_EQ(offline->cloth->reading.mu_roll, c.mu_roll());
+  EXPECT_EQ(offline->cloth->reading.sliding, static_cast<int>(c.sliding_stretches()));
+  EXPECT_EQ(offline->shots[1].before.mean_m, rep.shots(1).before().mean_m());
+
+  // The first 0.12 s of each shot, fewer points than a stretch takes: nothing to read.
+  for (v1::RecordedShot& shot : *req.mutable_shots()) {
+    google::protobuf::RepeatedPtrField<v1::TrackedPoint> kept;
+    for (const v1::TrackedPoint& p : shot.points()) {
+      if (p.t_s() <= 0.12) *kept.Add() = p;
+    }
+    *shot.mutable_points() = kept;
+  }
+  msgs.clear();
+  st = Calibrate(req, &msgs);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << st.error_message();
+  EXPECT_THAT(st.error_message(), HasSubstr("read_cloth: the training shots' tracks show 0"));
+}
+
 // Under the default request size limit, two recorded shots at 50 Hz are refused by gRPC.
 TEST_F(CalibrationTest, TheRequestSizeLimitHolds) {
   config_.max_receive_message_bytes = 64 << 10;

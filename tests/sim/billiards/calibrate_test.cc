@@ -287,6 +287,84 @@ TEST(ClothReadingTest, ReadClothFindsTheTablesClothFromItsTracks) {
   EXPECT_NEAR(pool_read.mu_slide, 0.2, 0.08 * 0.2);
 }
 
+// read_cloth starts a calibration from the cloth the training shots' tracks show: the same
+// reading ReadCloth gives of those shots alone (the held-out ones are not read), taken as a
+// given parameter is, so that the shots "before" are scored on it. From pool's cloth, a table
+// whose cloth is slower and grippier is then nearer before any fit than without the reading.
+// A fitted constant starts from its reading within its bounds; tracks too short to read
+// anything are refused, naming the option; a cancellation stops the reading.
+TEST(CalibrateTest, ReadClothStartsFromTheClothTheTracksShow) {
+  TableSpec truth_spec = Carom();
+  truth_spec.params.mu_roll = 0.0045;
+  truth_spec.params.mu_slide = 0.24;
+  const TableModel truth = *TableModel::Create(truth_spec);
+  const std::vector<Recording> recs = Recordings(truth, 6, 1e-3, 41);
+  CalibrationOptions o;
+  o.heldout = {4, 5};
+  o.read_cloth = true;
+  absl::StatusOr<CalibrationReport> read = Calibrate(Carom(), SolverOptions{}, recs, o);
+  ASSERT_TRUE(read.ok()) << read.status();
+  ASSERT_TRUE(read->cloth.has_value());
+  const ClothTaken& c = *read->cloth;
+  const ClothReading training =
+      ReadCloth(std::span<const Recording>(recs).first(4), truth_spec.params.gravity_mps2);
+  EXPECT_EQ(c.reading.rolling, training.rolling);
+  EXPECT_EQ(c.reading.mu_roll, training.mu_roll);
+  EXPECT_EQ(c.reading.mu_slide, training.mu_slide);
+  EXPECT_NE(c.reading.mu_roll, ReadCloth(recs, truth_spec.params.gravity_mps2).mu_roll);
+  ASSERT_TRUE(c.mu_roll_taken);
+  ASSERT_TRUE(c.mu_slide_taken);
+  EXPECT_EQ(c.mu_roll_before, 0.01);
+  EXPECT_EQ(c.mu_slide_before, 0.2);
+  EXPECT_EQ(c.mu_roll, training.mu_roll);
+  EXPECT_EQ(read->params.mu_roll, training.mu_roll);
+  EXPECT_EQ(read->params.mu_slide, training.mu_slide);
+  EXPECT_NEAR(read->params.mu_roll, 0.0045, 0.03 * 0.0045);
+  EXPECT_NEAR(read->params.mu_slide, 0.24, 0.08 * 0.24);
+  o.read_cloth = false;
+  absl::StatusOr<CalibrationReport> plain = Calibrate(Carom(), SolverOptions{}, recs, o);
+  ASSERT_TRUE(plain.ok()) << plain.status();
+  EXPECT_FALSE(plain->cloth.has_value());
+  EXPECT_LT(read->heldout_before_m, 0.5 * plain->heldout_before_m)
+      << read->heldout_before_m << " " << plain->heldout_before_m;
+  EXPECT_LT(read->train_before_m, 0.5 * plain->train_before_m);
+
+  // A fitted constant starts from its reading, within its bounds.
+  CalibrationOptions fit;
+  fit.read_cloth = true;
+  fit.heldout = {2, 3, 4, 5};
+  fit.max_iterations = 1;
+  fit.params = {{.name = "mu_roll", .lo = 0.002, .hi = 0.012},
+                {.name = "mu_slide", .lo = 0.15, .hi = 0.2}};
+  const ClothReading two = ReadCloth(std::span<const Recording>(recs).first(2));
+  ASSERT_GE(two.rolling, kClothMinStretches);
+  ASSERT_GE(two.sliding, kClothMinStretches);
+  ASSERT_GT(two.mu_slide, 0.2);
+  absl::StatusOr<CalibrationReport> bounded = Calibrate(Carom(), SolverOptions{}, recs, fit);
+  ASSERT_TRUE(bounded.ok()) << bounded.status();
+  ASSERT_EQ(bounded->fitted.size(), 2u);
+  EXPECT_EQ(bounded->fitted[0].before, two.mu_roll);
+  EXPECT_EQ(bounded->fitted[1].before, 0.2);
+  EXPECT_EQ(bounded->cloth->mu_slide, 0.2);
+
+  // Nothing to read: the first 0.12 s of each shot, fewer points than a stretch takes.
+  std::vector<Recording> short_recs = recs;
+  for (Recording& r : short_recs) {
+    std::erase_if(r.track, [](const TrackPoint& p) { return p.t_s > 0.12; });
+  }
+  o.read_cloth = true;
+  absl::StatusOr<CalibrationReport> none = Calibrate(Carom(), SolverOptions{}, short_recs, o);
+  EXPECT_EQ(none.status().code(), absl::StatusCode::kInvalidArgument) << none.status();
+  EXPECT_THAT(std::string(none.status().message()), HasSubstr("read_cloth"));
+
+  // Cancelled while reading: the reading polls before each stretch.
+  int polls = 0;
+  o.cancelled = [&] { return ++polls > 3; };
+  absl::StatusOr<CalibrationReport> stopped = Calibrate(Carom(), SolverOptions{}, recs, o);
+  EXPECT_EQ(stopped.status().code(), absl::StatusCode::kCancelled) << stopped.status();
+  EXPECT_EQ(polls, 4);
+}
+
 // A recording played back with its own strike on its own table scores zero; another strike
 // or another table does not.
 TEST(CalibrateTest, ARecordingScoresZeroAgainstItsOwnShot) {
