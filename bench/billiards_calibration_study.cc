@@ -49,9 +49,11 @@
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
 //          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
-//          [--strike-recovery]
+//          [--cushion-on-read-cloth] [--strike-recovery]
 //
 // --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
+// --cushion-on-read-cloth: a fourth row per model, cushion_on_read_cloth: the cloth read from
+// the training shots' tracks (no model), the spin-down and cushion constants fitted on it.
 // --resample: every strike fit resamples its starts between windows (StrikeBounds::resample);
 // the synthetic source ends in -resample.
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
@@ -84,6 +86,9 @@ constexpr double kPredictWindow = 0.4;  // s
 // Every fit's Huber scale (m; 0: squared distances), --huber; what a strike fit may be
 // (--fit-elevation).
 double huber_m = 0.0;
+// --cushion-on-read-cloth: a row more, the cloth read from the training shots' tracks
+// (CalibrationOptions::read_cloth) and the spin-down and cushion fitted on it.
+bool cushion_on_read_cloth = false;
 StrikeBounds strike_bounds;
 // The cushion models studied (--model, repeatable; default all three).
 std::vector<std::string> models;
@@ -360,33 +365,50 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
       s.params = r->params;
       Score(source, name, "rolling_only", s, test, truth);
     }
-    CalibrationOptions o;
-    o.huber_m = huber_m;
-    o.strike_bounds = strike_bounds;
-    for (const char* p : {"mu_slide", "mu_roll", "spin_decel_rps2"}) o.params.push_back({.name = p});
+    // The spin-down and the model's own cushion constants; calibrated: the cloth's with them.
+    std::vector<FitParam> cushion = {{.name = "spin_decel_rps2"}};
     if (cm != CushionModel::kMathavan2010) {
-      o.params.push_back({.name = "e_cushion"});
-      o.params.push_back({.name = "f_cushion"});
+      cushion.push_back({.name = "e_cushion"});
+      cushion.push_back({.name = "f_cushion"});
     } else {
-      o.params.push_back({.name = "e_cushion_mathavan"});
-      o.params.push_back({.name = "f_cushion_mathavan"});
+      cushion.push_back({.name = "e_cushion_mathavan"});
+      cushion.push_back({.name = "f_cushion_mathavan"});
     }
-    absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, train, o);
-    if (!r.ok()) {
-      std::fprintf(stderr, "%s %s: calibration failed: %s\n", source.c_str(), name.c_str(),
-                   r.status().ToString().c_str());
-      continue;
-    }
-    std::fprintf(stderr, "%s %s: calibrated in %lld simulations, %d iterations, start %d of %d kept\n",
-                 source.c_str(), name.c_str(), static_cast<long long>(r->simulations), r->iterations,
-                 r->start_kept, static_cast<int>(r->start_rms_m.size()));
-    for (const ParamReport& p : r->fitted) {
-      std::fprintf(stderr, "%s %s: %s %g -> %g (standard error %.2g%s)\n", source.c_str(),
-                   name.c_str(), p.name.c_str(), p.before, p.after, p.standard_error,
-                   p.at_bound ? ", at a bound" : "");
-    }
-    spec.params = r->params;
-    Score(source, name, "calibrated", spec, test, truth);
+    const auto calibrate = [&](const std::string& row, bool read_cloth,
+                               std::vector<FitParam> params) {
+      CalibrationOptions o;
+      o.huber_m = huber_m;
+      o.strike_bounds = strike_bounds;
+      o.read_cloth = read_cloth;
+      o.params = std::move(params);
+      absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, train, o);
+      if (!r.ok()) {
+        std::fprintf(stderr, "%s %s: %s failed: %s\n", source.c_str(), name.c_str(), row.c_str(),
+                     r.status().ToString().c_str());
+        return;
+      }
+      std::fprintf(stderr, "%s %s: %s in %lld simulations, %d iterations, start %d of %d kept\n",
+                   source.c_str(), name.c_str(), row.c_str(),
+                   static_cast<long long>(r->simulations), r->iterations, r->start_kept,
+                   static_cast<int>(r->start_rms_m.size()));
+      if (r->cloth) {
+        std::fprintf(stderr, "%s %s: cloth read: mu_roll %g (%d stretches), mu_slide %g (%d)\n",
+                     source.c_str(), name.c_str(), r->cloth->mu_roll, r->cloth->reading.rolling,
+                     r->cloth->mu_slide, r->cloth->reading.sliding);
+      }
+      for (const ParamReport& p : r->fitted) {
+        std::fprintf(stderr, "%s %s: %s %g -> %g (standard error %.2g%s)\n", source.c_str(),
+                     name.c_str(), p.name.c_str(), p.before, p.after, p.standard_error,
+                     p.at_bound ? ", at a bound" : "");
+      }
+      TableSpec s = spec;
+      s.params = r->params;
+      Score(source, name, row, s, test, truth);
+    };
+    std::vector<FitParam> all = {{.name = "mu_slide"}, {.name = "mu_roll"}};
+    all.insert(all.end(), cushion.begin(), cushion.end());
+    calibrate("calibrated", false, std::move(all));
+    if (cushion_on_read_cloth) calibrate("cushion_on_read_cloth", true, cushion);
   }
 }
 
@@ -496,6 +518,8 @@ int main(int argc, char** argv) {
       aimed = true;
     } else if (!std::strcmp(argv[i], "--fit-elevation")) {
       strike_bounds.fit_elevation = true;
+    } else if (!std::strcmp(argv[i], "--cushion-on-read-cloth")) {
+      cushion_on_read_cloth = true;
     } else if (!std::strcmp(argv[i], "--resample")) {
       strike_bounds.resample = true;
     } else if (!std::strcmp(argv[i], "--model") && i + 1 < argc) {
@@ -529,8 +553,8 @@ int main(int argc, char** argv) {
                    "[--recordings PATH] [--preset P] [--track-origin centre|corner] "
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
-                   "[--fit-elevation] [--resample] [--model M]... [--strike-recovery] "
-                   "[--read-cloth]\n");
+                   "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
+                   "[--strike-recovery] [--read-cloth]\n");
       return 2;
     }
   }
