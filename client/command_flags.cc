@@ -67,6 +67,8 @@ const Flags& SetupFlags() {
       {"ball", "put a ball at rest at (X, Y) m; an id already racked moves there, a new one is "
                "added (repeatable, each id once)"},
       {"param", "a model parameter (repeatable; `sportsim info` lists names, units, ranges)"},
+      {"param_file", "model parameters from a JSON file: an object of NAME: VALUE, or a `table "
+                     "calibrate --format json` report (its params); --param overrides it"},
       {"cushion_model", "han (default), mathavan2010, stronge or mirror"},
       {"jitter", "seeded random gaps between racked balls, [0, 0.01] m (default 0)"},
       {"rack_seed", "seed of --jitter (default 0)"},
@@ -257,6 +259,7 @@ std::vector<CommandSpec> MakeSpecs() {
        "sets, a JSON array of many shots); progress on stderr",
        Join({{{"table", "table preset to start from (default pool-9ft)"},
               {"param", "a starting parameter (repeatable)"},
+              {"param_file", "starting parameters from a JSON file (as table create's)"},
               {"cushion_model", "han (default), mathavan2010, stronge or mirror"}},
              SolverFlags(),
              {{"fit", "parameters to fit, NAME or NAME=LO:HI, comma separated (default bounds: "

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 #include <grpcpp/grpcpp.h>
 
@@ -46,6 +47,9 @@ ABSL_FLAG(std::string, engine, "", "Billiards engine: event|stepped (default: th
 ABSL_FLAG(bool, no_ccd, false, "Stepped engine without continuous collision detection");
 ABSL_FLAG(std::vector<std::string>, enable, {}, "Effects off by default to switch on: drag");
 ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mathavan2010|stronge|mirror");
+ABSL_FLAG(std::string, param_file, "",
+          "Model parameters from a JSON file: an object of NAME: VALUE, or a `table calibrate "
+          "--format json` report (its params); --param flags override it");
 ABSL_FLAG(std::optional<double>, sample_rate, std::nullopt, "Trajectory samples per second");
 ABSL_FLAG(std::optional<double>, max_time, std::nullopt, "Stop after this much simulated time (s)");
 ABSL_FLAG(int, samples, 1, "shot batch: noise samples of each strike, [1, 1000]");
@@ -53,6 +57,40 @@ ABSL_FLAG(std::string, outcome, "summary", "shot batch: what each outcome carrie
 ABSL_FLAG(std::string, svg, "", "Write a picture to this SVG file (shots, tables: top view; swings: stroboscopic side view)");
 
 namespace sportsim::cli {
+namespace {
+
+// --param-file FILE: a JSON object of parameters (NAME: number), or a calibration report
+// (`table calibrate --format json`) whose "params" object holds them.
+std::optional<std::string> ParamsFromFile(const std::string& path,
+                                          google::protobuf::Map<std::string, double>* out) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "--param-file: cannot read '" + path + "'";
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  google::protobuf::Struct doc;
+  if (!google::protobuf::util::JsonStringToMessage(text, &doc).ok()) {
+    return "--param-file: " + path + ": not a JSON object";
+  }
+  const google::protobuf::Struct* params = &doc;
+  if (const auto it = doc.fields().find("params"); it != doc.fields().end()) {
+    if (!it->second.has_struct_value()) {
+      return "--param-file: " + path + ": \"params\" must be an object of NAME: VALUE";
+    }
+    params = &it->second.struct_value();
+  }
+  // In name order, so that the first bad one named is the same every time.
+  const std::map<std::string, google::protobuf::Value> sorted(params->fields().begin(),
+                                                               params->fields().end());
+  if (sorted.empty()) return "--param-file: " + path + ": no parameters";
+  for (const auto& [name, value] : sorted) {
+    if (!value.has_number_value()) {
+      return "--param-file: " + path + ": \"" + name.substr(0, 32) + "\" must be a number";
+    }
+    (*out)[name] = value.number_value();
+  }
+  return std::nullopt;
+}
+
+}  // namespace
 
 std::optional<std::string> BuildSetup(v1::TableSetup* t) {
   if (FlagGiven("table") && absl::GetFlag(FLAGS_table).empty()) {
@@ -83,6 +121,9 @@ std::optional<std::string> BuildSetup(v1::TableSetup* t) {
     b->set_id(spec.substr(0, at));
     b->set_x_m(x);
     b->set_y_m(y);
+  }
+  if (const std::string path = absl::GetFlag(FLAGS_param_file); !path.empty()) {
+    if (auto bad = ParamsFromFile(path, t->mutable_params())) return *bad;
   }
   for (const std::string& spec : RepeatedFlagValues("param")) {
     const size_t eq = spec.find('=');

@@ -1821,6 +1821,41 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertIn("cloth read", r.stdout)
         self.assertRegex(r.stdout, r"use: --param mu_roll=0\.006 --param mu_slide=0\.175")
 
+    def test_a_calibrations_report_is_a_param_file(self):
+        # The json report of a calibration, saved, is the table's parameters for any command
+        # that takes --param: calibrated (mu_roll 0.006), the same files' strikes alone fit
+        # them exactly from the start; a --param beside it overrides it; a plain object of
+        # parameters works too; a value that is not a number is a usage error naming it.
+        r = cli(self.server.address, "--format", "json", "table", "calibrate", *self.files,
+                "--table", "carom", "--fit", "mu_roll")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        report = os.path.join(self.dir.name, "report.json")
+        with open(report, "w") as f:
+            f.write(r.stdout)
+        plain = os.path.join(self.dir.name, "params.json")
+        with open(plain, "w") as f:
+            json.dump({"mu_roll": 0.006}, f)
+        for path in (report, plain):
+            r = cli(self.server.address, "--format", "json", "table", "calibrate", *self.files,
+                    "--table", "carom", "--param-file", path)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            for shot in json.loads(r.stdout)["shots"]:
+                self.assertLess(shot["before"]["mean_m"], 1e-3)
+        r = cli(self.server.address, "--format", "json", "table", "calibrate", *self.files,
+                "--table", "carom", "--param-file", report, "--param", "mu_roll=0.0047")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        for shot in json.loads(r.stdout)["shots"]:
+            self.assertGreater(shot["before"]["mean_m"], 0.01)
+        r = cli(self.server.address, "--format", "json", "shot", "simulate", "--table", "carom",
+                "--rack", "empty", "--ball", "white@-1.0,0.1", "--strike-ball", "white",
+                "--ball-speed", "1", "--param-file", report)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(plain, "w") as f:
+            json.dump({"mu_roll": "fast"}, f)
+        r = cli(self.server.address, "table", "create", "--table", "carom", "--param-file", plain)
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn('"mu_roll" must be a number', r.stderr)
+
     def test_a_server_with_the_default_request_limit_calibrates_uploaded_shots(self):
         # The two recordings are larger than one request may be by default (64 KiB); the CLI
         # uploads them in parts (UploadCalibration), and the report is the one a server with
