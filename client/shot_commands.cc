@@ -71,16 +71,23 @@ std::optional<std::string> ParamsFromFile(const std::string& path,
     return "--param-file: " + path + ": not a JSON object";
   }
   const google::protobuf::Struct* params = &doc;
+  const google::protobuf::Struct none;
+  const bool report = doc.fields().contains("params") || doc.fields().contains("shots");
   if (const auto it = doc.fields().find("params"); it != doc.fields().end()) {
     if (!it->second.has_struct_value()) {
       return "--param-file: " + path + ": \"params\" must be an object of NAME: VALUE";
     }
     params = &it->second.struct_value();
+  } else if (report) {
+    params = &none;  // a report printed without its empty params
   }
   // In name order, so that the first bad one named is the same every time.
   const std::map<std::string, google::protobuf::Value> sorted(params->fields().begin(),
                                                                params->fields().end());
-  if (sorted.empty()) return "--param-file: " + path + ": no parameters";
+  if (sorted.empty()) {
+    return "--param-file: " + path +
+           (report ? ": a calibration report that moved no parameters" : ": no parameters");
+  }
   for (const auto& [name, value] : sorted) {
     if (!value.has_number_value()) {
       return "--param-file: " + path + ": \"" + name.substr(0, 32) + "\" must be a number";

@@ -863,16 +863,19 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
       std::cout << absl::StrFormat("%-22s %12s %12s %9s   %s\n", "cloth read", "table", "read",
                                    "stretches", "(median, quartiles)");
       const auto line = [](std::string_view name, double before, double read, double q1,
-                           double q3, uint32_t n, bool taken) {
+                           double q3, uint32_t n, bool taken, double start) {
+        std::string note = taken ? absl::StrFormat("%.4g-%.4g", q1, q3)
+                                 : std::string("too few stretches: not taken");
+        // A fitted constant starts within its bounds: say where, when that is not the reading.
+        if (taken && start != read) note += absl::StrFormat("; started at %.6g, a bound", start);
         std::cout << absl::StrFormat("%-22s %12.6g %12s %9d   %s\n", name, before,
                                      n == 0 ? std::string("-") : absl::StrFormat("%.6g", read), n,
-                                     taken ? absl::StrFormat("%.4g-%.4g", q1, q3)
-                                           : std::string("too few stretches: not taken"));
+                                     note);
       };
       line("mu_roll", c.mu_roll_before(), c.mu_roll(), c.mu_roll_q1(), c.mu_roll_q3(),
-           c.rolling_stretches(), c.mu_roll_taken());
+           c.rolling_stretches(), c.mu_roll_taken(), c.mu_roll_start());
       line("mu_slide", c.mu_slide_before(), c.mu_slide(), c.mu_slide_q1(), c.mu_slide_q3(),
-           c.sliding_stretches(), c.mu_slide_taken());
+           c.sliding_stretches(), c.mu_slide_taken(), c.mu_slide_start());
     }
     std::cout << absl::StrFormat("%-22s %12s %12s %12s   bounds\n", "parameter", "before", "after",
                                  "std error");

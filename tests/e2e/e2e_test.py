@@ -1855,6 +1855,15 @@ class CalibrateAgainstServer(unittest.TestCase):
         r = cli(self.server.address, "table", "create", "--table", "carom", "--param-file", plain)
         self.assertEqual(r.returncode, 64, r.stderr)
         self.assertIn('"mu_roll" must be a number', r.stderr)
+        # The report of strikes alone moved no parameter: said so, not a confusing key.
+        r = cli(self.server.address, "--format", "json", "table", "calibrate", *self.files,
+                "--table", "carom")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(report, "w") as f:
+            f.write(r.stdout)
+        r = cli(self.server.address, "table", "create", "--table", "carom", "--param-file", report)
+        self.assertEqual(r.returncode, 64, r.stderr)
+        self.assertIn("a calibration report that moved no parameters", r.stderr)
 
     def test_a_server_with_the_default_request_limit_calibrates_uploaded_shots(self):
         # The two recordings are larger than one request may be by default (64 KiB); the CLI
