@@ -16,6 +16,7 @@
 #include "absl/strings/str_format.h"
 #include "bench/billiards_scenes.h"
 #include "bench/billiards_storms.h"
+#include "sim/billiards/calibrate.h"
 #include "sim/billiards/cloth.h"
 #include "sim/billiards/collision.h"
 #include "sim/billiards/shot.h"
@@ -219,6 +220,55 @@ BENCHMARK(BM_CushionImpact)
                     static_cast<int>(CushionModel::kMathavan2010)},
                    {0, 1, 2}})
     ->Unit(benchmark::kNanosecond);
+
+// The cloth read from tracks (ReadCloth, what CalibrationOptions::read_cloth does before a
+// calibration): eight random three-ball carom shots at 2-4 m/s, tracked with 1 mm noise at
+// range(0) Hz (50: a match tracker; 250: a fast camera, five times the points and finer roll
+// starts to try). Items: tracked points, so the rate is per point.
+void BM_ReadCloth(benchmark::State& state) {
+  const TableModel model = *TableModel::Create(*MakeTablePreset("carom"));
+  const double l = model.spec().length_m, w = model.spec().width_m;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Recording> recs;
+  size_t points = 0;
+  for (int i = 0; i < 8; ++i) {
+    TableState s;
+    for (const char* id : {"white", "yellow", "red"}) {
+      Ball b;
+      b.id = id;
+      b.r = {0.4 * l * u(rng), 0.4 * w * u(rng), model.radius()};
+      bool clear = true;
+      for (const Ball& o : s.balls) clear = clear && (o.r - b.r).norm() > 8 * model.radius();
+      if (clear) s.balls.push_back(b);
+    }
+    if (s.balls.size() < 2) continue;
+    CueStrike strike;
+    strike.ball_speed = true;
+    strike.speed_mps = 3.0 + u(rng);
+    const Eigen::Vector3d to = s.balls[1].r - s.balls[0].r;
+    strike.phi_rad = std::atan2(to.y(), to.x()) + 0.2 * u(rng);
+    strike.a = 0.3 * u(rng);
+    strike.b = 0.3 * u(rng);
+    absl::StatusOr<Recording> r = SyntheticRecording(
+        model, SolverOptions{}, s, 0, strike,
+        SyntheticOptions{.rate_hz = static_cast<double>(state.range(0)), .noise_m = 1e-3,
+                         .seed = static_cast<uint64_t>(i + 1)});
+    if (!r.ok()) {
+      state.SkipWithError(std::string(r.status().message()).c_str());
+      return;
+    }
+    points += r->track.size();
+    recs.push_back(*std::move(r));
+  }
+  state.SetLabel(absl::StrFormat("%d Hz, %d shots, %d points", state.range(0), recs.size(), points));
+  for (auto _ : state) {
+    const ClothReading c = ReadCloth(recs, model.spec().params.gravity_mps2);
+    benchmark::DoNotOptimize(c);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(points));
+}
+BENCHMARK(BM_ReadCloth)->Arg(50)->Arg(250)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sportsim::billiards

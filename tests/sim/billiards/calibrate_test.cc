@@ -249,6 +249,42 @@ TEST(ClothReadingTest, AStrikeOnEndlessClothSlidesThenRollsAsTheClosedFormSays) 
   }
 }
 
+// A fast tracker's long roll: 30 s of a ball rolling straight on endless cloth, at 1 kHz with
+// half a millimetre of noise (30,000 points). It is read as a few long rolls (a window ends
+// where the noise alone fails its tests, which 30,000 tests do a time or two), each one's
+// deceleration the cloth's within four standard errors. Each
+// stretch's standard errors came from the pseudo-inverse of its whole Jacobian, which Eigen
+// forms through a square identity of the Jacobian's rows (a 17 s window here: 35,000 rows,
+// 9.8 GB); they come from its 9x9 normal matrix now.
+TEST(ClothReadingTest, AFastTrackersLongRollIsReadAsLongRolls) {
+  constexpr double kRate = 1000.0, kV0 = 0.6, kDecel = 0.002 * 9.81;
+  Recording rec;
+  rec.initial.balls.push_back(Ball{.id = "cue", .r = Eigen::Vector3d(0, 0, 0.03)});
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 5e-4);
+  for (int k = 1; k <= 30000; ++k) {
+    const double t = k / kRate;
+    const double x = kV0 * t - 0.5 * kDecel * t * t;
+    rec.track.push_back(TrackPoint{.t_s = t, .ball = 0, .xy = {x + noise(rng), noise(rng)}});
+  }
+  const std::vector<TrackedStretch> stretches = TrackedStretches(rec, 0);
+  ASSERT_FALSE(stretches.empty());
+  int points = 0;
+  for (const TrackedStretch& st : stretches) {
+    SCOPED_TRACE(::testing::Message() << "from " << st.t0_s << " s");
+    points += st.points;
+    EXPECT_TRUE(st.roll_read);
+    EXPECT_FALSE(st.slide_read);
+    EXPECT_GT(st.roll_se_mps2, 0.0);
+    EXPECT_LT(st.roll_se_mps2, 0.01 * kDecel);
+    EXPECT_NEAR(st.roll_decel_mps2, kDecel, 4 * st.roll_se_mps2);
+  }
+  // Long windows: the first alone has 10,000 points or more (20,000 rows: 3.2 GB before).
+  EXPECT_GE(stretches[0].points, 10000);
+  EXPECT_LE(stretches.size(), 5u);
+  EXPECT_GE(points, 29000);
+}
+
 // The cloth read from random three-ball shots on a carom table (50 Hz, 1 mm of noise, every
 // contact a stretch's end): the rolling resistance within 3 % and the sliding friction within
 // 8 % of the table's, whatever the cushion (the reading knows no model), with a tracker that
