@@ -1,5 +1,4 @@
 // `sportsim table ...`: authoritative tables (Billiards/CreateTable ... WatchTable).
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -907,18 +906,12 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
                                    rep.start_rms_m_size(), 1e3 * rep.start_rms_m(0), 1e3 * rep.start_rms_m(1));
     }
     std::cout << "\n";
-    // Every parameter the report's table has moved: the fitted ones and the cloth read.
+    // Every parameter the report's table has moved (params: the fitted ones and the cloth
+    // read), in name order.
     std::string flags;
-    std::vector<std::string> names;
-    for (const auto& [name, value] : rep.params()) names.push_back(name);
-    std::sort(names.begin(), names.end());
-    for (const v1::FittedParameter& p : rep.fitted()) {
-      flags += absl::StrFormat(" --param %s=%.6g", p.name(), p.after());
-    }
-    for (const std::string& name : names) {
-      bool fitted = false;
-      for (const v1::FittedParameter& p : rep.fitted()) fitted = fitted || p.name() == name;
-      if (!fitted) flags += absl::StrFormat(" --param %s=%.6g", name, rep.params().at(name));
+    for (const auto& [name, value] : std::map<std::string, double>(rep.params().begin(),
+                                                                   rep.params().end())) {
+      flags += absl::StrFormat(" --param %s=%.6g", name, value);
     }
     if (!flags.empty()) std::cout << "use:" << flags << "\n";
   });

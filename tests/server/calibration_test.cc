@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <random>
 #include <string>
 #include <thread>
 #include <vector>
@@ -347,25 +348,18 @@ TEST_F(CalibrationTest, HubersLossFitsThroughFalseDetections) {
 // read_cloth: the cloth read from the tracks (three shots, a millimetre of a tracker's noise)
 // is the table's, taken for the preset's before the strikes are fitted, reported with its
 // stretches and in the report's params, and the offline calibration's bit for bit; tracks too
-// short to read are refused naming the option, and nothing runs.
+// short to read are refused naming the option.
 TEST_F(CalibrationTest, ReadsTheClothFromTheTracks) {
   Start();
   v1::CalibrateTableRequest req = Request();
   *req.add_shots() = Record(0.2, 0.5, -70, 3.5, 0.1);
   req.clear_fit();
-  uint64_t state = 12345;
-  auto noise = [&] {  // a deterministic millimetre: the sum of twelve uniforms less six
-    double sum = 0;
-    for (int k = 0; k < 12; ++k) {
-      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-      sum += static_cast<double>(state >> 11) * 0x1.0p-53;
-    }
-    return 1e-3 * (sum - 6.0);
-  };
+  std::mt19937_64 rng(12345);
+  std::normal_distribution<double> noise(0.0, 1e-3);
   for (v1::RecordedShot& shot : *req.mutable_shots()) {
     for (v1::TrackedPoint& p : *shot.mutable_points()) {
-      p.set_x_m(p.x_m() + noise());
-      p.set_y_m(p.y_m() + noise());
+      p.set_x_m(p.x_m() + noise(rng));
+      p.set_y_m(p.y_m() + noise(rng));
     }
   }
   req.set_read_cloth(true);

@@ -252,10 +252,10 @@ TEST(ClothReadingTest, AStrikeOnEndlessClothSlidesThenRollsAsTheClosedFormSays) 
 // A fast tracker's long roll: 30 s of a ball rolling straight on endless cloth, at 1 kHz with
 // half a millimetre of noise (30,000 points). It is read as a few long rolls (a window ends
 // where the noise alone fails its tests, which 30,000 tests do a time or two), each one's
-// deceleration the cloth's within four standard errors. Each
-// stretch's standard errors came from the pseudo-inverse of its whole Jacobian, which Eigen
-// forms through a square identity of the Jacobian's rows (a 17 s window here: 35,000 rows,
-// 9.8 GB); they come from its 9x9 normal matrix now.
+// deceleration the cloth's within four standard errors. Each stretch's standard errors came
+// from the pseudo-inverse of its whole Jacobian, which Eigen forms through a square identity
+// of the Jacobian's rows (a 17 s window here: 35,000 rows, 9.8 GB); they come from its 9x9
+// normal matrix now.
 TEST(ClothReadingTest, AFastTrackersLongRollIsReadAsLongRolls) {
   constexpr double kRate = 1000.0, kV0 = 0.6, kDecel = 0.002 * 9.81;
   Recording rec;
