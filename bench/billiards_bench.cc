@@ -12,6 +12,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "absl/strings/str_format.h"
 #include "bench/billiards_scenes.h"
@@ -93,9 +94,12 @@ BENCHMARK(BM_EightBallBreak)
 
 // A batch of 256 seeded random shots on a 9-ft table with a 9-ball rack (random speed 0.5-8
 // m/s, direction, elevation and tip offset), each to rest with the event engine: shots per
-// second per core is items_per_second.
+// second per core is items_per_second. range(0): effects; range(1): slip-speed friction's
+// u_c in mm/s (0: off; 16 bands).
 void BM_RandomShots(benchmark::State& state) {
-  TableModel m = *TableModel::Create(*MakeTablePreset("pool-9ft"));
+  TableSpec spec = *MakeTablePreset("pool-9ft");
+  spec.params.slide_fade_speed_mps = 1e-3 * static_cast<double>(state.range(1));
+  TableModel m = *TableModel::Create(spec);
   std::vector<TableState> shots;
   std::mt19937_64 rng(42);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -109,22 +113,32 @@ void BM_RandomShots(benchmark::State& state) {
   }
   const SolverOptions o{.engine = Engine::kEvent,
                         .effects = static_cast<uint32_t>(state.range(0))};
-  state.SetLabel(absl::StrFormat("event, effects 0x%x", state.range(0)));
+  state.SetLabel(state.range(1) == 0
+                     ? absl::StrFormat("event, effects 0x%x", state.range(0))
+                     : absl::StrFormat("event, effects 0x%x, slip fade %d mm/s", state.range(0),
+                                       state.range(1)));
   int64_t events = 0;
+  std::vector<int64_t> per_shot;
   for (auto _ : state) {
     events = 0;
+    per_shot.clear();
     for (const TableState& s : shots) {
       absl::StatusOr<ShotResult> r = SimulateShot(m, o, s, {});
       events += static_cast<int64_t>(r->events.size());
+      per_shot.push_back(static_cast<int64_t>(r->events.size()));
       benchmark::DoNotOptimize(r);
     }
   }
   state.counters["events_per_shot"] = static_cast<double>(events) / 256.0;
+  std::sort(per_shot.begin(), per_shot.end());
+  state.counters["events_median"] = static_cast<double>(per_shot[per_shot.size() / 2]);
+  state.counters["events_max"] = static_cast<double>(per_shot.back());
   state.SetItemsProcessed(state.iterations() * 256);
 }
 BENCHMARK(BM_RandomShots)
-    ->Arg(0)
-    ->Arg(kEffectDisableOrientation)
+    ->Args({0, 0})
+    ->Args({kEffectDisableOrientation, 0})
+    ->Args({0, 300})
     ->Unit(benchmark::kMillisecond);
 
 // The storm batch (bench/billiards_storms.h, bench/results/storms-2026-12.md): 1000 seeded

@@ -49,13 +49,16 @@
 //          [--preset P] [--track-origin centre|corner] [--track-scale S] [--recorded-shots N]
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
 //          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
-//          [--cushion-on-read-cloth] [--strike-recovery]
+//          [--cushion-on-read-cloth] [--strike-recovery] [--fade-recovery U]
 //
 // --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
 // --cushion-on-read-cloth: a fourth row per model, cushion_on_read_cloth: the cloth read from
 // the training shots' tracks (no model), the spin-down and cushion constants fitted on it.
 // --resample: every strike fit resamples its starts between windows (StrikeBounds::resample);
 // the synthetic source ends in -resample.
+// --fade-recovery U: instead, whether a calibration reads slip-speed friction (u_c = U) back
+// from the synthetic shots' tracks, with U = 0 the control (FadeRecovery; --shots, --huber and
+// --fit-elevation apply).
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
 // strikes, each start alone and resampled, under the reference table itself or --preset's
 // (StrikeRecovery; --shots, --aimed, --huber and --fit-elevation apply).
@@ -92,6 +95,8 @@ bool cushion_on_read_cloth = false;
 StrikeBounds strike_bounds;
 // The cushion models studied (--model, repeatable; default all three).
 std::vector<std::string> models;
+// --fade-recovery U: the synthetic recordings' table slides with slip-speed friction u_c = U.
+double reference_fade_mps = 0.0;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -106,6 +111,7 @@ TableSpec ReferenceTable() {
   s.params.e_cushion_mathavan = 0.98;
   s.params.f_cushion_mathavan = 0.14;
   s.params.mu_roll = 0.006;
+  s.params.slide_fade_speed_mps = reference_fade_mps;
   return s;
 }
 
@@ -449,6 +455,43 @@ void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
                "each start alone, %d resampled\n", misses, scored, resampled_misses);
 }
 
+// Slip-speed friction read back from tracks: n synthetic recordings made with u_c = `fade` (the
+// reference table otherwise, tracked at 50 Hz with 1 mm noise), calibrated from the reference
+// table with the fade off, u_c alone fitted in [0, 1] m/s: on all n shots, then on each half
+// (trained on it, scored on the other). `fade` 0 is the control: what the noise alone reads.
+// CSV on stdout.
+void FadeRecovery(int n, double fade) {
+  reference_fade_mps = fade;
+  const std::vector<Recording> recs = Synthetic(n, 47);
+  TableSpec spec = ReferenceTable();
+  spec.params.slide_fade_speed_mps = 0.0;
+  std::printf("true_fade_mps,trained_on,heldout,fitted_fade_mps,standard_error,at_bound,"
+              "train_before_mm,train_after_mm,heldout_before_mm,heldout_after_mm,simulations\n");
+  const int half = n / 2;
+  for (const std::string split : {"all", "first_half", "second_half"}) {
+    CalibrationOptions o;
+    o.params.push_back({.name = "slide_fade_speed_mps", .lo = 0.0, .hi = 1.0});
+    o.strike_bounds = strike_bounds;
+    o.huber_m = huber_m;
+    for (int i = 0; i < n; ++i) {
+      if ((split == "first_half" && i >= half) || (split == "second_half" && i < half)) {
+        o.heldout.push_back(i);
+      }
+    }
+    absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, recs, o);
+    if (!r.ok()) {
+      std::fprintf(stderr, "fade recovery (%s): %s\n", split.c_str(), r.status().ToString().c_str());
+      continue;
+    }
+    const ParamReport& p = r->fitted[0];
+    std::printf("%.3f,%s,%zu,%.4f,%.2g,%d,%.2f,%.2f,%.2f,%.2f,%lld\n", fade, split.c_str(),
+                o.heldout.size(), p.after, p.standard_error, p.at_bound ? 1 : 0,
+                1e3 * r->train_before_m, 1e3 * r->train_after_m, 1e3 * r->heldout_before_m,
+                1e3 * r->heldout_after_m, static_cast<long long>(r->simulations));
+    std::fflush(stdout);
+  }
+}
+
 // The cloth read from the tracks alone (TrackedStretches, ReadCloth): every stretch as a CSV
 // row, then the reading of each source as a comment line. Returns whether the synthetic
 // recordings' reading finds the reference table's cloth: its rolling resistance within 3 %
@@ -489,10 +532,17 @@ int main(int argc, char** argv) {
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
   bool aimed = false, strike_recovery = false, preset_given = false, read_cloth = false;
+  double fade_recovery = -1.0;
   std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--strike-recovery")) {
       strike_recovery = true;
+    } else if (!std::strcmp(argv[i], "--fade-recovery") && i + 1 < argc) {
+      fade_recovery = std::atof(argv[++i]);
+      if (!(fade_recovery >= 0.0 && fade_recovery <= 1.0)) {
+        std::fprintf(stderr, "--fade-recovery: a slip in [0, 1] m/s\n");
+        return 2;
+      }
     } else if (!std::strcmp(argv[i], "--read-cloth")) {
       read_cloth = true;
     } else if (!std::strcmp(argv[i], "--quick")) {
@@ -554,9 +604,13 @@ int main(int argc, char** argv) {
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
                    "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
-                   "[--strike-recovery] [--read-cloth]\n");
+                   "[--strike-recovery] [--read-cloth] [--fade-recovery U]\n");
       return 2;
     }
+  }
+  if (fade_recovery >= 0.0) {
+    FadeRecovery(shots, fade_recovery);
+    return 0;
   }
   if (strike_recovery) {
     absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);

@@ -855,6 +855,9 @@ std::optional<std::pair<double, double>> CalibrationRange(std::string_view name)
   // 0.98 at the nose). Cushion friction: around Mathavan's measured 0.14 and Han's 0.2. The
   // cushion rubber's Poisson ratio (Stronge's stiffness ratio): 0.3 (a compressible filled
   // rubber; pooltool's fixed frequency ratio 1.7 is about 0.3) to 0.5 (incompressible).
+  // Slip-speed friction's u_c has no published value (Cross's curve was not at hand): from
+  // none to 1 m/s, a third of a hard stun shot's first slip, past which the fade would be the
+  // slide's whole law rather than its end.
   struct Range {
     std::string_view name;
     double lo, hi;
@@ -865,6 +868,7 @@ std::optional<std::pair<double, double>> CalibrationRange(std::string_view name)
       {"e_cushion", 0.6, 0.98},         {"f_cushion", 0.05, 0.35},
       {"e_cushion_mathavan", 0.6, 0.99}, {"f_cushion_mathavan", 0.05, 0.35},
       {"cushion_poisson_ratio", 0.3, 0.5},
+      {"slide_fade_speed_mps", 0.0, 1.0},
   };
   for (const Range& r : kRanges) {
     if (r.name == name) return std::make_pair(r.lo, r.hi);
@@ -929,6 +933,10 @@ absl::StatusOr<Prepared> Prepare(const TableSpec& spec, const SolverOptions& sol
     }
     for (const Fitted& f : fitted) {
       if (f.info == info) return absl::InvalidArgumentError(absl::StrCat("params: ", p.name, " twice"));
+    }
+    if (info->field == &PhysicsParams::slide_fade_bands) {
+      return absl::InvalidArgumentError(
+          "params: slide_fade_bands is the fade's accuracy (a whole number), not fitted");
     }
     double lo = p.lo, hi = p.hi;
     if (lo == 0.0 && hi == 0.0) {

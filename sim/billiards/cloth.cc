@@ -1,5 +1,6 @@
 #include "sim/billiards/cloth.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -8,7 +9,69 @@ namespace {
 
 double Sign(double x) { return x > 0 ? 1.0 : (x < 0 ? -1.0 : 0.0); }
 
+// Slip-speed friction's bands. Band k (1..K) holds the slips from E(k-1) to E(k), E(j) = u_c j /
+// K; slips from E(K) = u_c up slide at mu_s ("band K + 1"). A band's slips start a guard below
+// its edges: a slip brought to an edge by its transition time (E(k-1), give or take rounding,
+// about 1e-15 m/s at the speeds of a table) is still in band k, so every rate the band's piece
+// evaluates, to its very end, is band k's; the transition then sets the slip a guard further
+// down, inside band k - 1 (which shortens each band by a few 1e-13 s). The guard is 1e-13 m/s,
+// or a thousandth of the band where that is narrower (a fade far below kRestSlip, which ends
+// the slide first: the calibration's probes of u_c near 0 come here).
+double Guard(const PhysicsParams& p) {
+  return std::min(1e-13, 1e-3 * p.slide_fade_speed_mps / p.slide_fade_bands);
+}
+
+bool Fades(const PhysicsParams& p) { return p.slide_fade_speed_mps > 0.0; }
+int Bands(const PhysicsParams& p) { return static_cast<int>(p.slide_fade_bands); }
+
+// The band of a slip (1..K + 1); only with the fade on.
+int BandOf(const PhysicsParams& p, double slip) {
+  const int bands = Bands(p);
+  const double k = std::floor((slip + Guard(p)) * bands / p.slide_fade_speed_mps) + 1.0;
+  return k > bands ? bands + 1 : static_cast<int>(std::max(k, 1.0));
+}
+
+// E(j): the slip at band j's upper edge.
+double BandEdge(const PhysicsParams& p, int j) {
+  return p.slide_fade_speed_mps * j / Bands(p);
+}
+
+// The rolling part of a sliding ball's motion, v - 2/7 u (horizontal).
+Eigen::Vector3d RollingPart(const Eigen::Vector3d& v, const Eigen::Vector3d& u) {
+  return {v.x() - (2.0 / 7.0) * u.x(), v.y() - (2.0 / 7.0) * u.y(), 0.0};
+}
+
+// Changes v by dv and w_xy by z^ x dv / R: the contact point's slip does not change.
+void AddKeepingSlip(const Eigen::Vector3d& dv, double radius, Eigen::Vector3d* v,
+                    Eigen::Vector3d* w) {
+  v->x() += dv.x();
+  v->y() += dv.y();
+  w->x() -= dv.y() / radius;
+  w->y() += dv.x() / radius;
+}
+
+// A sliding ball at (or within rounding of) no slip starts rolling. Friction acts at the contact
+// point, so the angular momentum about it is conserved: v_roll = v - 2/7 u (exact at u = 0; a
+// projection for the last bit of slip).
+void EndSlide(double radius, Ball* ball) {
+  const Eigen::Vector3d u = Slip(ball->v, ball->w, radius);
+  ball->v -= (2.0 / 7.0) * u;
+  ball->v.z() = 0.0;
+  ball->w.x() = -ball->v.y() / radius;
+  ball->w.y() = ball->v.x() / radius;
+  if (ball->v.head<2>().norm() <= kRestSpeed) {
+    ball->v.setZero();
+    ball->w.x() = ball->w.y() = 0.0;
+  }
+}
+
 }  // namespace
+
+double SlideFriction(const PhysicsParams& p, double slip) {
+  if (!Fades(p)) return p.mu_slide;
+  const int k = BandOf(p, slip);
+  return k > Bands(p) ? p.mu_slide : p.mu_slide * (k - 0.5) / Bands(p);
+}
 
 MotionState Classify(const TableModel& model, const Ball& ball) {
   if (ball.state == MotionState::kPocketed) return MotionState::kPocketed;
@@ -31,9 +94,17 @@ Rates ClothRates(const TableModel& model, uint32_t effects, MotionState state,
       const double un = u.norm();
       if (un > 0) {
         const Eigen::Vector3d uh = u / un;
-        const double f = p.mu_slide * p.gravity_mps2;
+        const double f = SlideFriction(p, un) * p.gravity_mps2;
         r.dv = -f * uh;
         r.dw = (2.5 * f / radius) * Eigen::Vector3d(-uh.y(), uh.x(), 0.0);  // z^ x u^
+      }
+      if (Fades(p) && (effects & kEffectDisableRollingResistance) == 0 &&
+          BandOf(p, un) <= Bands(p)) {
+        const Eigen::Vector3d vr = RollingPart(v, u);
+        const double n = vr.norm();
+        if (n > kRestSpeed) {
+          AddKeepingSlip(-(p.mu_roll * p.gravity_mps2 / n) * vr, radius, &r.dv, &r.dw);
+        }
       }
       break;
     }
@@ -92,8 +163,30 @@ double ZeroTime(const TableModel& model, const Ball& ball, const Rates& rates,
     case TransitionKind::kSlideEnd: {
       if (ball.state != MotionState::kSliding) return kNever;
       const Eigen::Vector3d u = Slip(ball.v, ball.w, model.radius());
+      if (Fades(model.params()) && BandOf(model.params(), u.norm()) > 1) return kNever;
       const double closing = -u.dot(Slip(rates.dv, rates.dw, model.radius()));
       return closing > 0 ? u.squaredNorm() / closing : kNever;
+    }
+    case TransitionKind::kSlideBand: {
+      // The slip falls along its own direction: |u| - edge at |u|'s rate, -u . du / |u|.
+      const PhysicsParams& p = model.params();
+      if (ball.state != MotionState::kSliding || !Fades(p)) return kNever;
+      const Eigen::Vector3d u = Slip(ball.v, ball.w, model.radius());
+      const double un = u.norm();
+      const int k = BandOf(p, un);
+      if (k <= 1) return kNever;
+      const double closing = -u.dot(Slip(rates.dv, rates.dw, model.radius()));
+      return closing > 0 ? std::max(un - BandEdge(p, k - 1), 0.0) * un / closing : kNever;
+    }
+    case TransitionKind::kGlideStop: {
+      if (ball.state != MotionState::kSliding || !Fades(model.params())) return kNever;
+      const Eigen::Vector3d u = Slip(ball.v, ball.w, model.radius());
+      const Eigen::Vector3d vr = RollingPart(ball.v, u);
+      if (vr.norm() <= kRestSpeed) return kNever;
+      const Eigen::Vector3d dvr =
+          RollingPart(rates.dv, Slip(rates.dv, rates.dw, model.radius()));
+      const double closing = -vr.dot(dvr);
+      return closing > 0 ? vr.squaredNorm() / closing : kNever;
     }
     case TransitionKind::kRollStop: {
       if (ball.state != MotionState::kRolling) return kNever;
@@ -128,7 +221,8 @@ NextTransition TimeToTransition(const TableModel& model, uint32_t effects, const
   const Rates rates = ClothRates(model, effects, ball.state, ball.v, ball.w);
   if (rates_out != nullptr) *rates_out = rates;
   for (TransitionKind kind :
-       {TransitionKind::kSlideEnd, TransitionKind::kRollStop, TransitionKind::kSpinStop}) {
+       {TransitionKind::kSlideEnd, TransitionKind::kRollStop, TransitionKind::kSpinStop,
+        TransitionKind::kSlideBand, TransitionKind::kGlideStop}) {
     const double dt = ZeroTime(model, ball, rates, kind);
     if (dt < next.dt_s) {
       next.dt_s = dt;
@@ -141,20 +235,9 @@ NextTransition TimeToTransition(const TableModel& model, uint32_t effects, const
 void ApplyTransition(const TableModel& model, TransitionKind kind, Ball* ball) {
   const double radius = model.radius();
   switch (kind) {
-    case TransitionKind::kSlideEnd: {
-      // Friction acts at the contact point, so the angular momentum about it is conserved:
-      // v_roll = v - 2/7 u (exact at u = 0; a projection for the last bit of slip).
-      const Eigen::Vector3d u = Slip(ball->v, ball->w, radius);
-      ball->v -= (2.0 / 7.0) * u;
-      ball->v.z() = 0.0;
-      ball->w.x() = -ball->v.y() / radius;
-      ball->w.y() = ball->v.x() / radius;
-      if (ball->v.head<2>().norm() <= kRestSpeed) {
-        ball->v.setZero();
-        ball->w.x() = ball->w.y() = 0.0;
-      }
+    case TransitionKind::kSlideEnd:
+      EndSlide(radius, ball);
       break;
-    }
     case TransitionKind::kRollStop:
       ball->v.setZero();
       ball->w.x() = ball->w.y() = 0.0;
@@ -162,6 +245,32 @@ void ApplyTransition(const TableModel& model, TransitionKind kind, Ball* ball) {
     case TransitionKind::kSpinStop:
       ball->w.z() = 0.0;
       break;
+    case TransitionKind::kSlideBand: {
+      // The slip is at the edge E(j) nearest it (its band's lower one): set it a guard inside
+      // the band below, keeping v - 2/7 u (the angular momentum about the contact point).
+      const PhysicsParams& p = model.params();
+      const Eigen::Vector3d u = Slip(ball->v, ball->w, radius);
+      const double un = u.norm();
+      const double edges = un / BandEdge(p, 1);  // past K only for a fade below rounding
+      const int j = edges >= Bands(p) ? Bands(p) : static_cast<int>(std::lround(edges));
+      const double target = BandEdge(p, j) - 2.0 * Guard(p);
+      if (j < 1 || target <= kRestSlip) {  // the slide ends at a band edge too slow to slide
+        EndSlide(radius, ball);
+        break;
+      }
+      const Eigen::Vector3d du = (target / un - 1.0) * u;
+      // v - 2/7 u kept: v moves by 2/7 du and w by what makes the slip move by du.
+      ball->v.x() += (2.0 / 7.0) * du.x();
+      ball->v.y() += (2.0 / 7.0) * du.y();
+      ball->w.x() += (5.0 / 7.0) * du.y() / radius;
+      ball->w.y() -= (5.0 / 7.0) * du.x() / radius;
+      break;
+    }
+    case TransitionKind::kGlideStop: {
+      const Eigen::Vector3d u = Slip(ball->v, ball->w, radius);
+      AddKeepingSlip(-RollingPart(ball->v, u), radius, &ball->v, &ball->w);
+      break;
+    }
     case TransitionKind::kNone:
       break;
   }

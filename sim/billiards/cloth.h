@@ -5,6 +5,14 @@
 //   |u| falls at (7/2) mu_s g and the slide ends after 2|u0| / (7 mu_s g).
 // - Rolling (u = 0): dv/dt = -mu_r g v^, w_xy = z^ x v / R; stops after |v| / (mu_r g).
 // - Every moving state: d(w_z)/dt = -spin_decel sgn(w_z).
+// - Slip-speed friction (off unless slide_fade_speed_mps u_c > 0): below u_c the sliding
+//   friction is mu_s |u| / u_c, taken as slide_fade_bands bands of constant friction, each at
+//   its middle slip's value (band k of K: slips from (k-1) u_c / K to k u_c / K, friction
+//   mu_s (k - 1/2) / K), so every band is a constant-acceleration piece whose end is exact.
+//   In the fade (slips below u_c) rolling resistance acts too, on the rolling part of the
+//   motion v_r = v - 2/7 u (which friction at the contact does not change): dv/dt gains
+//   -mu_r g v_r^ and w_xy the matching z^ x dv / R, so the slip is untouched and v_r slows
+//   at mu_r g until it stops.
 // - Air drag (optional, stepped engine only): F = -1/2 rho C_d pi R^2 |v| v on the centre (a
 //   rolling ball feels 5/7 of it, the rest goes into keeping it rolling) and a torque
 //   -1/2 rho C_m R^5 |w| w.
@@ -43,7 +51,11 @@ Rates ClothRates(const TableModel& model, uint32_t effects, MotionState state,
                  const Eigen::Vector3d& v, const Eigen::Vector3d& w);
 
 /// What ends a ball's current smooth motion.
-enum class TransitionKind : uint8_t { kNone, kSlideEnd, kRollStop, kSpinStop };
+/// kSlideBand: the slip reaches the lower edge of its friction band (slip-speed friction);
+/// kGlideStop: the rolling part v - 2/7 u of a sliding ball stops (slip-speed friction).
+enum class TransitionKind : uint8_t {
+  kNone, kSlideEnd, kRollStop, kSpinStop, kSlideBand, kGlideStop
+};
 struct NextTransition {
   double dt_s = std::numeric_limits<double>::infinity();
   TransitionKind kind = TransitionKind::kNone;
@@ -62,8 +74,14 @@ double TimeToZero(const TableModel& model, uint32_t effects, const Ball& ball,
 
 /// Snaps a ball whose transition is due: a sliding ball becomes rolling with the velocity that
 /// conserves its angular momentum about the contact point (v - 2/7 u), a rolling ball stops, a
-/// vanishing w_z becomes zero. Then sets the state from Classify.
+/// vanishing w_z becomes zero, a slip at a band's edge is set just inside the band below, a
+/// sliding ball's stopping rolling part becomes zero (the slip kept). Then sets the state from
+/// Classify.
 void ApplyTransition(const TableModel& model, TransitionKind kind, Ball* ball);
+
+/// The sliding friction coefficient at a slip of `slip` (m/s): mu_slide, or with slip-speed
+/// friction on, its band's value below slide_fade_speed_mps.
+double SlideFriction(const PhysicsParams& p, double slip);
 
 /// Translational plus rotational kinetic energy of a ball (J).
 double KineticEnergy(const TableModel& model, const Ball& ball);

@@ -15,11 +15,13 @@ constexpr std::array<std::string_view, 8> kEffectNames = {
     "drag", "spin_decay", "rolling_resistance", "ball_friction",
     "cushions", "pockets", "orientation", "squirt"};
 
-constexpr std::array<ParamInfo, 23> kParams = {{
+constexpr std::array<ParamInfo, 25> kParams = {{
     {"gravity_mps2", "m/s^2", "gravitational acceleration g", &PhysicsParams::gravity_mps2, 0.1, 100},
     {"ball_radius_m", "m", "ball radius R", &PhysicsParams::ball_radius_m, 0.005, 0.1},
     {"ball_mass_kg", "kg", "ball mass m (inertia 2/5 m R^2)", &PhysicsParams::ball_mass_kg, 0.01, 2},
     {"mu_slide", "", "sliding friction coefficient mu_s", &PhysicsParams::mu_slide, 0.01, 1},
+    {"slide_fade_speed_mps", "m/s", "slip below which the sliding friction falls with the slip (0: constant friction)", &PhysicsParams::slide_fade_speed_mps, 0, 10},
+    {"slide_fade_bands", "", "the slip fade's accuracy: bands of constant friction below slide_fade_speed_mps (a whole number)", &PhysicsParams::slide_fade_bands, 1, 1000},
     {"mu_roll", "", "rolling resistance coefficient mu_r", &PhysicsParams::mu_roll, 0, 0.5},
     {"spin_decel_rps2", "rad/s^2", "spin-down rate of omega_z", &PhysicsParams::spin_decel_rps2, 0, 1000},
     {"e_ball", "", "ball-ball restitution e_b", &PhysicsParams::e_ball, 0, 1},
@@ -130,6 +132,10 @@ absl::Status SetParam(std::string_view name, double value, PhysicsParams* params
     if (absl::Status s = CheckFiniteInRange(p.name, value, p.lo, false, p.hi, false); !s.ok()) {
       return s;
     }
+    if (p.field == &PhysicsParams::slide_fade_bands && value != std::floor(value)) {
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "slide_fade_bands must be a whole number of bands, got %g", value));
+    }
     params->*p.field = value;
     return absl::OkStatus();
   }
@@ -145,6 +151,11 @@ absl::Status ValidateParams(const PhysicsParams& p) {
       return s;
     }
   }
+  if (p.slide_fade_bands != std::floor(p.slide_fade_bands)) {
+    return absl::InvalidArgumentError(absl::StrFormat(
+        "slide_fade_bands must be a whole number of bands, got %g", p.slide_fade_bands));
+  }
+
   const double r = p.ball_radius_m;
   if (!(p.cushion_height_m > r && p.cushion_height_m < 2.0 * r)) {
     return absl::InvalidArgumentError(absl::StrFormat(

@@ -102,6 +102,14 @@ struct PhysicsParams {
   double ball_radius_m = 0.028575;     ///< R (m): WPA pool ball, 57.15 mm diameter
   double ball_mass_kg = 0.170;         ///< m (kg); inertia I = 2/5 m R^2
   double mu_slide = 0.2;               ///< sliding friction: dv/dt = -mu_s g u^ while sliding
+  /// u_c (m/s): below this slip the sliding friction falls with the slip, to nothing at none
+  /// (Cross's measurement); 0, the default, keeps it constant. Below u_c rolling resistance
+  /// also slows the rolling part of the sliding ball's motion (docs/billiards.md, "Slip-speed
+  /// friction").
+  double slide_fade_speed_mps = 0.0;
+  /// The fade's accuracy: it is taken as this many bands of constant friction below u_c, each
+  /// at the fade's value at the band's middle slip (a whole number).
+  double slide_fade_bands = 16;
   double mu_roll = 0.01;               ///< rolling resistance: dv/dt = -mu_r g v^ while rolling
   double spin_decel_rps2 = 10.0;       ///< spin-down: d(omega_z)/dt = -this sgn(omega_z) (rad/s^2)
   double e_ball = 0.95;                ///< ball-ball restitution e_b

@@ -859,6 +859,31 @@ CalibrationOptions SmallOptions() {
   return o;
 }
 
+// Slip-speed friction is read back from 50 Hz tracks with 1 mm noise: three shots of a table
+// whose friction fades below 0.3 m/s, calibrated from the same table with constant friction
+// (the fade alone wrong), find u_c within a few standard errors, and the fit's distances fall
+// to the noise. From 0 the calibration's first probe is a fade far below any slip.
+TEST(CalibrateTest, ReadsTheSlipSpeedFrictionBack) {
+  TableSpec faded = TrueTable();
+  faded.params.slide_fade_speed_mps = 0.3;
+  const TableModel truth = *TableModel::Create(faded);
+  const std::vector<Recording> recs = Recordings(truth, 3, 1e-3, 21);
+  TableSpec start = faded;
+  start.params.slide_fade_speed_mps = 0.0;
+  CalibrationOptions o;
+  o.params = {{.name = "slide_fade_speed_mps"}};
+  absl::StatusOr<CalibrationReport> r = Calibrate(start, SolverOptions{}, recs, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_EQ(r->fitted.size(), 1u);
+  EXPECT_EQ(r->fitted[0].hi, 1.0);  // the default range
+  const double se = r->fitted[0].standard_error;
+  EXPECT_GT(se, 0.0);
+  EXPECT_LT(se, 0.02);
+  EXPECT_NEAR(r->params.slide_fade_speed_mps, 0.3, std::max(4.0 * se, 0.005));
+  EXPECT_GT(r->train_before_m, 1.5e-3);  // the constant law is millimetres off these tracks
+  EXPECT_LT(r->train_after_m, 1.4e-3);   // the fade fits them to the noise (1.25 mm)
+}
+
 // The same calibration twice gives bit-identical parameters and strikes; the held-out shot is
 // scored on all its points though its strike saw half a second of them; a recording whose
 // strike is known keeps it.
@@ -918,6 +943,8 @@ TEST(CalibrateTest, RefusesBadInputNamingTheField) {
     EXPECT_THAT(refused(good, bad), HasSubstr("outside its bounds"));
     bad.params = {{.name = "mu_roll"}, {.name = "mu_roll"}};
     EXPECT_THAT(refused(good, bad), HasSubstr("twice"));
+    bad.params = {{.name = "slide_fade_bands"}};  // an accuracy setting, a whole number
+    EXPECT_THAT(refused(good, bad), HasSubstr("slide_fade_bands is the fade's accuracy"));
     bad = none;
     bad.heldout = {2};
     EXPECT_THAT(refused(good, bad), HasSubstr("heldout: 2"));

@@ -112,6 +112,34 @@ double LargestCushionPenetration(const TableModel& m, const TableState& s) {
 
 // --- Convergence of the stepped engine to the event engine ----------------------------------
 
+// The event engine's state at t_end (exact), with its handled transitions; the run must meet
+// a ball and a cushion.
+TableState ExactAt(const TableModel& m, const TableState& s, double t_end,
+                   int64_t* transitions = nullptr) {
+  std::vector<Event> ev;
+  std::unique_ptr<TableSimulation> exact = Sim(m, kEvent, s, &ev);
+  EXPECT_TRUE(exact->AdvanceTo(t_end, &ev).ok());
+  EXPECT_GE(Count(ev, EventKind::kBallBall), 1);
+  EXPECT_GE(Count(ev, EventKind::kBallCushion), 1);
+  if (transitions != nullptr) *transitions = EventCountsOf(*exact)->transition;
+  return exact->state();
+}
+
+// The stepped engine's largest distance from `ref` over the balls at t_end.
+double SteppedError(const TableModel& m, const TableState& s, double t_end, const TableState& ref,
+                    Integrator integ, double dt) {
+  TableState t = s;
+  std::vector<Event> e;
+  EXPECT_TRUE(
+      Advance(m, {.engine = Engine::kStepped, .integrator = integ, .dt_s = dt}, t_end, &t, &e)
+          .ok());
+  double worst = 0.0;
+  for (size_t i = 0; i < t.balls.size(); ++i) {
+    worst = std::max(worst, (t.balls[i].r - ref.balls[i].r).norm());
+  }
+  return worst;
+}
+
 // A cut with follow and a cushion: both balls slide, roll, collide and bank within 1.2 s. The
 // stepped engine's error against the event engine (exact) at t = 1.2 s must fall at the order of
 // its integrator: first for Euler and semi-implicit Euler, rounding for rk4 (exact on constant
@@ -122,23 +150,9 @@ TEST(EventEngineTest, SteppedEngineConvergesToItAtItsIntegratorsOrder) {
   ASSERT_TRUE(ApplyStrike(m, 0, {.speed_mps = 2.5, .ball_speed = true, .b = 0.2}, 0, &s)
                   .ok());
   constexpr double kT = 1.2;
-  std::vector<Event> ev;
-  std::unique_ptr<TableSimulation> exact = Sim(m, kEvent, s, &ev);
-  ASSERT_TRUE(exact->AdvanceTo(kT, &ev).ok());
-  ASSERT_GE(Count(ev, EventKind::kBallBall), 1);
-  ASSERT_GE(Count(ev, EventKind::kBallCushion), 1);
-  const TableState ref = exact->state();
+  const TableState ref = ExactAt(m, s, kT);
   const auto error = [&](Integrator integ, double dt) {
-    TableState t = s;
-    std::vector<Event> e;
-    EXPECT_TRUE(Advance(m, {.engine = Engine::kStepped, .integrator = integ, .dt_s = dt}, kT, &t,
-                        &e)
-                    .ok());
-    double worst = 0.0;
-    for (size_t i = 0; i < t.balls.size(); ++i) {
-      worst = std::max(worst, (t.balls[i].r - ref.balls[i].r).norm());
-    }
-    return worst;
+    return SteppedError(m, s, kT, ref, integ, dt);
   };
   for (Integrator integ : {Integrator::kEuler, Integrator::kSemiImplicitEuler}) {
     const double e1 = error(integ, 1.0 / 960), e2 = error(integ, 1.0 / 1920),
@@ -154,6 +168,29 @@ TEST(EventEngineTest, SteppedEngineConvergesToItAtItsIntegratorsOrder) {
   }
   // rk4: exact up to rounding and its 1e-13 s contact bracket, at any step.
   for (double dt : {1.0 / 120, 1.0 / 960}) EXPECT_LT(error(Integrator::kRk4, dt), 1e-9) << dt;
+}
+
+// The same with slip-speed friction on (docs/billiards.md): its bands are constant-acceleration
+// pieces with closed-form ends, so rk4 stays exact on them and meets the event engine through
+// the collisions and the cushion at any step; a draw shot ends sliding at a band's friction.
+TEST(EventEngineTest, SlipSpeedFrictionKeepsTheEnginesTogether) {
+  absl::StatusOr<TableSpec> spec = MakeTablePreset("pool-9ft");
+  ASSERT_TRUE(spec.ok());
+  spec->params.slide_fade_speed_mps = 0.4;
+  spec->params.slide_fade_bands = 16;
+  const TableModel m = Model("pool-9ft", &spec->params);
+  TableState s{.balls = {BallAt("cue", -0.6, 0.0, m), BallAt("1", 0.0, 0.8 * m.radius(), m),
+                         BallAt("2", 0.5, -0.3, m)}};
+  ASSERT_TRUE(ApplyStrike(m, 0, {.speed_mps = 2.5, .ball_speed = true, .a = 0.2, .b = -0.4}, 0,
+                          &s)
+                  .ok());
+  constexpr double kT = 2.5;
+  int64_t transitions = 0;
+  const TableState ref = ExactAt(m, s, kT, &transitions);
+  EXPECT_GT(transitions, 16) << "the bands should end in transitions";
+  for (double dt : {1.0 / 120, 1.0 / 960}) {
+    EXPECT_LT(SteppedError(m, s, kT, ref, Integrator::kRk4, dt), 1e-9) << dt;
+  }
 }
 
 // --- Pitfalls --------------------------------------------------------------------------------
