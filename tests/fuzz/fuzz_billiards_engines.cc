@@ -1,7 +1,7 @@
 // The billiards engines on small random scenes: 2-6 balls placed where ValidateLayout accepts
 // them (anywhere on the cloth, some frozen against another ball) on a pool-9ft, snooker or carom
 // table with Han's cushions, or a pool-9ft or carom one with Stronge's compliant cushions (a
-// stiff rubber on the pool table), a cue strike decoded from the bytes, then both engines (event and stepped), advanced in
+// stiff rubber on the pool table) or with slip-speed friction, a cue strike decoded from the bytes, then both engines (event and stepped), advanced in
 // chunks (a server's ticks) under a small time budget and event cap. Invariants:
 // - every ball's position, velocity, spin and orientation finite after every chunk;
 // - events in time order, inside the chunk that reported them, with valid indices;
@@ -21,6 +21,7 @@
 #include <cstdlib>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "sim/billiards/cue.h"
@@ -198,6 +199,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       b::TableSpec s = *b::MakeTablePreset(p);
       s.params.cushion_model = b::CushionModel::kStrongeCompliant;
       if (s.name == "pool-9ft") s.params.cushion_poisson_ratio = 0.0;
+      m.push_back(*b::TableModel::Create(s));
+    }
+    // Slip-speed friction: pool cloth fading below 0.3 m/s in 16 bands, carom cloth below
+    // 1 m/s in 3 (coarse bands, a fade most slides reach).
+    for (const auto& [p, fade, bands] : {std::tuple{"pool-9ft", 0.3, 16}, {"carom", 1.0, 3}}) {
+      b::TableSpec s = *b::MakeTablePreset(p);
+      s.params.slide_fade_speed_mps = fade;
+      s.params.slide_fade_bands = bands;
       m.push_back(*b::TableModel::Create(s));
     }
     return m;
