@@ -73,6 +73,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "client/track_json.h"
@@ -468,7 +469,7 @@ void FadeRecovery(int n, double fade) {
   std::printf("true_fade_mps,trained_on,heldout,fitted_fade_mps,standard_error,at_bound,"
               "train_before_mm,train_after_mm,heldout_before_mm,heldout_after_mm,simulations\n");
   const int half = n / 2;
-  for (const std::string split : {"all", "first_half", "second_half"}) {
+  for (const std::string_view split : {"all", "first_half", "second_half"}) {
     CalibrationOptions o;
     o.params.push_back({.name = "slide_fade_speed_mps", .lo = 0.0, .hi = 1.0});
     o.strike_bounds = strike_bounds;
@@ -480,11 +481,13 @@ void FadeRecovery(int n, double fade) {
     }
     absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, recs, o);
     if (!r.ok()) {
-      std::fprintf(stderr, "fade recovery (%s): %s\n", split.c_str(), r.status().ToString().c_str());
+      std::fprintf(stderr, "fade recovery (%s): %s\n", std::string(split).c_str(),
+                   r.status().ToString().c_str());
       continue;
     }
     const ParamReport& p = r->fitted[0];
-    std::printf("%.3f,%s,%zu,%.4f,%.2g,%d,%.2f,%.2f,%.2f,%.2f,%lld\n", fade, split.c_str(),
+    std::printf("%.3f,%s,%zu,%.4f,%.2g,%d,%.2f,%.2f,%.2f,%.2f,%lld\n", fade,
+                std::string(split).c_str(),
                 o.heldout.size(), p.after, p.standard_error, p.at_bound ? 1 : 0,
                 1e3 * r->train_before_m, 1e3 * r->train_after_m, 1e3 * r->heldout_before_m,
                 1e3 * r->heldout_after_m, static_cast<long long>(r->simulations));

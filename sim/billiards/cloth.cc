@@ -14,7 +14,7 @@ double Sign(double x) { return x > 0 ? 1.0 : (x < 0 ? -1.0 : 0.0); }
 // its edges: a slip brought to an edge by its transition time (E(k-1), give or take rounding,
 // about 1e-15 m/s at the speeds of a table) is still in band k, so every rate the band's piece
 // evaluates, to its very end, is band k's; the transition then sets the slip a guard further
-// down, inside band k - 1 (which shortens each band by a few 1e-13 s). The guard is 1e-13 m/s,
+// down, inside band k - 1 (which shortens a band by 1e-12 s at most, for 16). The guard is 1e-13 m/s,
 // or a thousandth of the band where that is narrower (a fade far below kRestSlip, which ends
 // the slide first: the calibration's probes of u_c near 0 come here).
 double Guard(const PhysicsParams& p) {
@@ -65,13 +65,15 @@ void EndSlide(double radius, Ball* ball) {
   }
 }
 
-}  // namespace
-
+// The sliding friction coefficient at a slip of `slip` (m/s): mu_slide, or with slip-speed
+// friction on, its band's value below slide_fade_speed_mps.
 double SlideFriction(const PhysicsParams& p, double slip) {
   if (!Fades(p)) return p.mu_slide;
   const int k = BandOf(p, slip);
   return k > Bands(p) ? p.mu_slide : p.mu_slide * (k - 0.5) / Bands(p);
 }
+
+}  // namespace
 
 MotionState Classify(const TableModel& model, const Ball& ball) {
   if (ball.state == MotionState::kPocketed) return MotionState::kPocketed;

@@ -79,10 +79,6 @@ double TimeToZero(const TableModel& model, uint32_t effects, const Ball& ball,
 /// Classify.
 void ApplyTransition(const TableModel& model, TransitionKind kind, Ball* ball);
 
-/// The sliding friction coefficient at a slip of `slip` (m/s): mu_slide, or with slip-speed
-/// friction on, its band's value below slide_fade_speed_mps.
-double SlideFriction(const PhysicsParams& p, double slip);
-
 /// Translational plus rotational kinetic energy of a ball (J).
 double KineticEnergy(const TableModel& model, const Ball& ball);
 

@@ -113,6 +113,13 @@ void BuildCaromTable(TableSpec* t) {
   t->cushions.push_back({{hx, -hy}, {hx, hy}, "rail_right"});
 }
 
+// slide_fade_bands counts bands: a whole number (its range is checked with the others').
+absl::Status CheckWholeBands(double bands) {
+  if (bands == std::floor(bands)) return absl::OkStatus();
+  return absl::InvalidArgumentError(
+      absl::StrFormat("slide_fade_bands must be a whole number of bands, got %g", bands));
+}
+
 }  // namespace
 
 std::span<const std::string_view> EffectNames() { return kEffectNames; }
@@ -132,9 +139,8 @@ absl::Status SetParam(std::string_view name, double value, PhysicsParams* params
     if (absl::Status s = CheckFiniteInRange(p.name, value, p.lo, false, p.hi, false); !s.ok()) {
       return s;
     }
-    if (p.field == &PhysicsParams::slide_fade_bands && value != std::floor(value)) {
-      return absl::InvalidArgumentError(absl::StrFormat(
-          "slide_fade_bands must be a whole number of bands, got %g", value));
+    if (p.field == &PhysicsParams::slide_fade_bands) {
+      if (absl::Status s = CheckWholeBands(value); !s.ok()) return s;
     }
     params->*p.field = value;
     return absl::OkStatus();
@@ -151,11 +157,7 @@ absl::Status ValidateParams(const PhysicsParams& p) {
       return s;
     }
   }
-  if (p.slide_fade_bands != std::floor(p.slide_fade_bands)) {
-    return absl::InvalidArgumentError(absl::StrFormat(
-        "slide_fade_bands must be a whole number of bands, got %g", p.slide_fade_bands));
-  }
-
+  if (absl::Status s = CheckWholeBands(p.slide_fade_bands); !s.ok()) return s;
   const double r = p.ball_radius_m;
   if (!(p.cushion_height_m > r && p.cushion_height_m < 2.0 * r)) {
     return absl::InvalidArgumentError(absl::StrFormat(

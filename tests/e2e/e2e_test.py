@@ -314,7 +314,8 @@ class CliAgainstServer(unittest.TestCase):
         self.assertIn("squirt", caps["effects"])
         names = {p["name"] for p in caps["parameters"]}
         for name in ("gravity_mps2", "mu_slide", "mu_roll", "spin_decel_rps2", "e_ball",
-                     "e_cushion", "f_cushion", "ball_radius_m", "ball_mass_kg", "cue_mass_kg"):
+                     "e_cushion", "f_cushion", "ball_radius_m", "ball_mass_kg", "cue_mass_kg",
+                     "slide_fade_speed_mps", "slide_fade_bands"):
             self.assertIn(name, names)
         self.assertIn("sportsim.v1.Billiards", caps["services"])
         # The design's names: build, capabilities.presets (the same list as table_presets).
@@ -384,6 +385,26 @@ class CliAgainstServer(unittest.TestCase):
         self.assertAlmostEqual(after["1"]["vy_mps"], 0.0, places=9)
         self.assertAlmostEqual(after["cue"]["vy_mps"], 0.0, places=9)
         self.assertGreater(out["balls"][1]["x_m"], 0)  # ball 1 ended up on the +x side
+
+    def test_slip_speed_friction(self):
+        # A 2 m/s stun shot on the endless cloth, with the cloth's friction constant and then
+        # fading below u_c = 0.3 m/s: below u_c the slip integrates twice what it would, and
+        # rolling resistance slows the rolling part from the moment the slip reaches u_c,
+        # (7/2) mu_s g earlier than the constant law lets it (pool cloth: mu_s 0.2, mu_r 0.01).
+        shot = ("--format", "json", "shot", "simulate", "--table", "unbounded", "--rack",
+                "empty", "--ball", "cue@0,0", "--ball-speed", "2", "--phi", "0")
+        rest = {}
+        for fade in (None, "0.3"):
+            extra = ("--param", "slide_fade_speed_mps=" + fade) if fade else ()
+            r = cli(self.server.address, *shot, *extra)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            rest[fade] = json.loads(r.stdout)["balls"][0]["x_m"]
+        g, mu_s, uc, v_r0 = 9.81, 0.2, 0.3, 2.0 * 5 / 7
+        moved = -v_r0 * uc / (3.5 * mu_s * g) + (2 / 7) * uc * uc / (7 * mu_s * g)
+        self.assertAlmostEqual(rest["0.3"] - rest[None], moved, places=7)
+        r = cli(self.server.address, *shot, "--param", "slide_fade_bands=2.5")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("slide_fade_bands must be a whole number", r.stderr)
 
     def test_cushion_models(self):
         # A stun ball into the top rail, slightly off square (still sliding when it gets

@@ -206,6 +206,18 @@ TEST(BilliardsConvertTest, CushionModelMirror) {
   (*r.mutable_table()->mutable_params())["cushion_poisson_ratio"] = 0.6;
   EXPECT_THAT(ShotJobFromProto(r).status().message(),
               ::testing::HasSubstr("cushion_poisson_ratio"));
+  // Slip-speed friction: a cloth law's switch and its accuracy, set by name like the rest.
+  r.mutable_table()->clear_params();
+  (*r.mutable_table()->mutable_params())["slide_fade_speed_mps"] = 0.3;
+  (*r.mutable_table()->mutable_params())["slide_fade_bands"] = 8;
+  job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().slide_fade_speed_mps, 0.3);
+  EXPECT_EQ(job->table.model.params().slide_fade_bands, 8);
+  (*r.mutable_table()->mutable_params())["slide_fade_bands"] = 8.5;
+  absl::Status bad = ShotJobFromProto(r).status();
+  EXPECT_EQ(bad.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(bad.message(), ::testing::HasSubstr("slide_fade_bands must be a whole number"));
 }
 
 TEST(BilliardsConvertTest, OtherPresetsTakeTheirGamesRack) {

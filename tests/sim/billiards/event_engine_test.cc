@@ -172,7 +172,7 @@ TEST(EventEngineTest, SteppedEngineConvergesToItAtItsIntegratorsOrder) {
 
 // The same with slip-speed friction on (docs/billiards.md): its bands are constant-acceleration
 // pieces with closed-form ends, so rk4 stays exact on them and meets the event engine through
-// the collisions and the cushion at any step; a draw shot ends sliding at a band's friction.
+// the collisions and the cushion at any step; the draw shot's slides pass through the bands.
 TEST(EventEngineTest, SlipSpeedFrictionKeepsTheEnginesTogether) {
   absl::StatusOr<TableSpec> spec = MakeTablePreset("pool-9ft");
   ASSERT_TRUE(spec.ok());
