@@ -949,7 +949,7 @@ TEST(SlipSpeedFrictionTest, TheBandsAreAWholeNumber) {
 // A fade far below any slip a table shows (a calibration's first probe of u_c from 0 is one)
 // slides, ends and rests as the constant law does, to within what it moves, 2/7 of the extra
 // integral 2 u_c^2 / (7 mu_s g) plus v_r0 u_c / ((7/2) mu_s g) from the rolling resistance.
-TEST(SlipSpeedFrictionTest, AFadeBelowTheRestSlipIsTheConstantLaw) {
+TEST(SlipSpeedFrictionTest, AFadeFarBelowATablesSlipsIsTheConstantLaw) {
   for (const double fade : {1e-6, 1e-9, 1e-13, 1e-300}) {
     SCOPED_TRACE(testing::Message() << "u_c = " << fade);
     const TableModel constant = MakeModel("unbounded");
