@@ -24,8 +24,9 @@ double Guard(const PhysicsParams& p) {
 bool Fades(const PhysicsParams& p) { return p.slide_fade_speed_mps > 0.0; }
 int Bands(const PhysicsParams& p) { return static_cast<int>(p.slide_fade_bands); }
 
-// The band of a slip (1..K + 1); only with the fade on.
+// The band of a slip: 1..K in the fade, K + 1 above it; 0 with the fade off.
 int BandOf(const PhysicsParams& p, double slip) {
+  if (!Fades(p)) return 0;
   const int bands = Bands(p);
   const double k = std::floor((slip + Guard(p)) * bands / p.slide_fade_speed_mps) + 1.0;
   return k > bands ? bands + 1 : static_cast<int>(std::max(k, 1.0));
@@ -65,12 +66,12 @@ void EndSlide(double radius, Ball* ball) {
   }
 }
 
-// The sliding friction coefficient at a slip of `slip` (m/s): mu_slide, or with slip-speed
-// friction on, its band's value below slide_fade_speed_mps.
-double SlideFriction(const PhysicsParams& p, double slip) {
-  if (!Fades(p)) return p.mu_slide;
-  const int k = BandOf(p, slip);
-  return k > Bands(p) ? p.mu_slide : p.mu_slide * (k - 0.5) / Bands(p);
+bool InFade(const PhysicsParams& p, int band) { return band >= 1 && band <= Bands(p); }
+
+// The sliding friction coefficient in a band (BandOf): mu_slide outside the fade, the fade's
+// value at the band's middle slip in it.
+double SlideFriction(const PhysicsParams& p, int band) {
+  return InFade(p, band) ? p.mu_slide * (band - 0.5) / Bands(p) : p.mu_slide;
 }
 
 }  // namespace
@@ -94,14 +95,14 @@ Rates ClothRates(const TableModel& model, uint32_t effects, MotionState state,
     case MotionState::kSliding: {
       const Eigen::Vector3d u = Slip(v, w, radius);
       const double un = u.norm();
+      const int band = BandOf(p, un);
       if (un > 0) {
         const Eigen::Vector3d uh = u / un;
-        const double f = SlideFriction(p, un) * p.gravity_mps2;
+        const double f = SlideFriction(p, band) * p.gravity_mps2;
         r.dv = -f * uh;
         r.dw = (2.5 * f / radius) * Eigen::Vector3d(-uh.y(), uh.x(), 0.0);  // z^ x u^
       }
-      if (Fades(p) && (effects & kEffectDisableRollingResistance) == 0 &&
-          BandOf(p, un) <= Bands(p)) {
+      if (InFade(p, band) && (effects & kEffectDisableRollingResistance) == 0) {
         const Eigen::Vector3d vr = RollingPart(v, u);
         const double n = vr.norm();
         if (n > kRestSpeed) {
@@ -162,23 +163,22 @@ double ZeroTime(const TableModel& model, const Ball& ball, const Rates& rates,
   constexpr double kNever = std::numeric_limits<double>::infinity();
   // Each quantity falls linearly at its current rate; time to reach zero.
   switch (kind) {
-    case TransitionKind::kSlideEnd: {
-      if (ball.state != MotionState::kSliding) return kNever;
-      const Eigen::Vector3d u = Slip(ball.v, ball.w, model.radius());
-      if (Fades(model.params()) && BandOf(model.params(), u.norm()) > 1) return kNever;
-      const double closing = -u.dot(Slip(rates.dv, rates.dw, model.radius()));
-      return closing > 0 ? u.squaredNorm() / closing : kNever;
-    }
+    case TransitionKind::kSlideEnd:
     case TransitionKind::kSlideBand: {
-      // The slip falls along its own direction: |u| - edge at |u|'s rate, -u . du / |u|.
+      // The slip falls along its own direction, |u| at the rate -u . du / |u|, to its band's
+      // lower edge: zero in the last band (or with the fade off), where the slide ends
+      // (kSlideEnd); E(k - 1) in band k >= 2 (kSlideBand).
+      if (ball.state != MotionState::kSliding) return kNever;
       const PhysicsParams& p = model.params();
-      if (ball.state != MotionState::kSliding || !Fades(p)) return kNever;
       const Eigen::Vector3d u = Slip(ball.v, ball.w, model.radius());
-      const double un = u.norm();
-      const int k = BandOf(p, un);
-      if (k <= 1) return kNever;
+      const int band = BandOf(p, u.norm());
+      const bool last = band <= 1;
+      if (last != (kind == TransitionKind::kSlideEnd)) return kNever;
       const double closing = -u.dot(Slip(rates.dv, rates.dw, model.radius()));
-      return closing > 0 ? std::max(un - BandEdge(p, k - 1), 0.0) * un / closing : kNever;
+      if (!(closing > 0)) return kNever;
+      if (last) return u.squaredNorm() / closing;
+      const double un = u.norm();
+      return std::max(un - BandEdge(p, band - 1), 0.0) * un / closing;
     }
     case TransitionKind::kGlideStop: {
       if (ball.state != MotionState::kSliding || !Fades(model.params())) return kNever;

@@ -879,7 +879,7 @@ TEST(CalibrateTest, ReadsTheSlipSpeedFrictionBack) {
   const double se = r->fitted[0].standard_error;
   EXPECT_GT(se, 0.0);
   EXPECT_LT(se, 0.02);
-  EXPECT_NEAR(r->params.slide_fade_speed_mps, 0.3, std::max(4.0 * se, 0.005));
+  EXPECT_NEAR(r->params.slide_fade_speed_mps, 0.3, 4.0 * se) << "standard error " << se;
   EXPECT_GT(r->train_before_m, 1.5e-3);  // the constant law is millimetres off these tracks
   EXPECT_LT(r->train_after_m, 1.4e-3);   // the fade fits them to the noise (1.25 mm)
 }
