@@ -857,7 +857,9 @@ std::optional<std::pair<double, double>> CalibrationRange(std::string_view name)
   // rubber; pooltool's fixed frequency ratio 1.7 is about 0.3) to 0.5 (incompressible).
   // Slip-speed friction's u_c has no published value (Cross's curve was not at hand): from
   // none to 1 m/s, a third of a hard stun shot's first slip, past which the fade would be the
-  // slide's whole law rather than its end.
+  // slide's whole law rather than its end. The cushion restitution's exponent: from none (a
+  // constant restitution) to 1, a loss 1 - e growing in proportion to the approach speed,
+  // five times a viscoelastic sphere's 1/5.
   struct Range {
     std::string_view name;
     double lo, hi;
@@ -868,7 +870,7 @@ std::optional<std::pair<double, double>> CalibrationRange(std::string_view name)
       {"e_cushion", 0.6, 0.98},         {"f_cushion", 0.05, 0.35},
       {"e_cushion_mathavan", 0.6, 0.99}, {"f_cushion_mathavan", 0.05, 0.35},
       {"cushion_poisson_ratio", 0.3, 0.5},
-      {"slide_fade_speed_mps", 0.0, 1.0},
+      {"slide_fade_speed_mps", 0.0, 1.0}, {"cushion_restitution_exponent", 0.0, 1.0},
   };
   for (const Range& r : kRanges) {
     if (r.name == name) return std::make_pair(r.lo, r.hi);
@@ -1164,8 +1166,14 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
   if (joint) {
     VectorXd x(kp);
     for (int c = 0; c < kp; ++c) {
+      // A start on a bound (a switch's off value, as a fade or a restitution's fall fitted from
+      // 0) starts a hundredth of the range inside it: on the bound the logistic coordinate sits
+      // on its flat tail, where the parameter answers a millionth of what it does in the
+      // middle, and the first accepted step could leap to the other tail and stay there.
       const Fitted& fp = fitted[static_cast<size_t>(c)];
-      x[c] = ToU(spec.params.*(fp.info->field), fp.lo, fp.hi);
+      const double inside = 0.01 * (fp.hi - fp.lo);
+      x[c] = ToU(std::clamp(spec.params.*(fp.info->field), fp.lo + inside, fp.hi - inside), fp.lo,
+                 fp.hi);
     }
     // The strikes refitted to the parameters u (from where they were), then every shot's
     // residuals: the reduced problem's residual function.

@@ -851,6 +851,12 @@ double StrongeFrequencyRatio(double poisson) {
   return std::sqrt(3.5 * 2.0 * (1.0 - poisson) / (2.0 - poisson));
 }
 
+double CushionRestitution(double e, double exponent, double approach_mps) {
+  if (approach_mps < kRestingContactSpeed) return 0.0;
+  if (exponent == 0.0) return e;
+  return std::clamp(1.0 - (1.0 - e) * std::pow(approach_mps, exponent), 0.0, 1.0);
+}
+
 bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball* ball) {
   const Eigen::Vector3d nh(normal.x(), normal.y(), 0.0);
   const double vn = ball->v.dot(nh);
@@ -859,8 +865,9 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
   if (p.cushion_model == CushionModel::kMirror) {
     ball->v -= (-vn < kRestingContactSpeed ? 1.0 : 2.0) * vn * nh;
   } else if (p.cushion_model == CushionModel::kMathavan2010) {
-    CollideCushionMathavan(model, nh, -vn < kRestingContactSpeed ? 0.0 : p.e_cushion_mathavan,
-                           p.f_cushion_mathavan, p.mu_slide, ball);
+    CollideCushionMathavan(
+        model, nh, CushionRestitution(p.e_cushion_mathavan, p.cushion_restitution_exponent, -vn),
+        p.f_cushion_mathavan, p.mu_slide, ball);
   } else {
     // kHan and kStrongeCompliant. The nose touches the ball at angle theta_a above its
     // equator: contact point r_c = R (-cos nh + sin z^), contact normal into the ball
@@ -871,7 +878,7 @@ bool CollideCushion(const TableModel& model, const Eigen::Vector2d& normal, Ball
     const double c = std::sqrt(1.0 - s * s);
     const Eigen::Vector3d rc = radius * (-c * nh + s * Eigen::Vector3d::UnitZ());
     const Eigen::Vector3d n = c * nh - s * Eigen::Vector3d::UnitZ();
-    const double e = -vn < kRestingContactSpeed ? 0.0 : p.e_cushion;
+    const double e = CushionRestitution(p.e_cushion, p.cushion_restitution_exponent, -vn);
     const double jn = -(1.0 + e) * m * ball->v.dot(n);
     // Slip of the contact point across the nose; Coulomb friction capped at sticking, where
     // 7/(2m) is a free sphere's inverse effective mass for a tangential impulse at its surface.

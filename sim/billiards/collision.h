@@ -94,6 +94,11 @@ double RestingStopSpeed(const TableModel& model);
 /// Stops a rolling ball slower than RestingStopSpeed (see above); anything else is unchanged.
 void StopCreep(const TableModel& model, uint32_t effects, Ball* ball);
 
+/// The cushion's restitution for an approach at `approach_mps` across the cushion line: `e`
+/// where `exponent` is 0, else 1 - (1 - e) approach^exponent (approach in m/s) within [0, 1];
+/// 0 (plastic) below kRestingContactSpeed. PhysicsParams::cushion_restitution_exponent.
+double CushionRestitution(double e, double exponent, double approach_mps);
+
 /// Resolves a ball-cushion contact; `normal` is the horizontal unit normal pointing from the
 /// cushion towards the ball's centre. Does nothing (returns false) when the ball is not moving
 /// into the cushion.

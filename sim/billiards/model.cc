@@ -15,7 +15,7 @@ constexpr std::array<std::string_view, 8> kEffectNames = {
     "drag", "spin_decay", "rolling_resistance", "ball_friction",
     "cushions", "pockets", "orientation", "squirt"};
 
-constexpr std::array<ParamInfo, 25> kParams = {{
+constexpr std::array<ParamInfo, 26> kParams = {{
     {"gravity_mps2", "m/s^2", "gravitational acceleration g", &PhysicsParams::gravity_mps2, 0.1, 100},
     {"ball_radius_m", "m", "ball radius R", &PhysicsParams::ball_radius_m, 0.005, 0.1},
     {"ball_mass_kg", "kg", "ball mass m (inertia 2/5 m R^2)", &PhysicsParams::ball_mass_kg, 0.01, 2},
@@ -34,6 +34,7 @@ constexpr std::array<ParamInfo, 25> kParams = {{
     {"f_cushion_mathavan", "", "Mathavan 2010 cushion: ball-cushion sliding friction", &PhysicsParams::f_cushion_mathavan, 0, 2},
     {"cushion_impulse_steps", "", "Mathavan 2010 cushion: the fallback's impulse step, 1/N of the impact (where error control fails)", &PhysicsParams::cushion_impulse_steps, 10, 100000},
     {"cushion_poisson_ratio", "", "Stronge compliant cushion: Poisson ratio of the rubber (stiffness ratio)", &PhysicsParams::cushion_poisson_ratio, 0, 0.5},
+    {"cushion_restitution_exponent", "", "the cushion restitution's fall with approach speed: e(v) = 1 - (1 - e)(v / 1 m/s)^p (0: constant)", &PhysicsParams::cushion_restitution_exponent, 0, 2},
     {"cushion_height_m", "m", "cushion nose height above the slate h (R < h < 2R)", &PhysicsParams::cushion_height_m, 0.005, 0.2},
     {"cue_mass_kg", "kg", "cue mass M", &PhysicsParams::cue_mass_kg, 0.05, 5},
     {"cue_end_mass_kg", "kg", "cue end mass m_e (squirt)", &PhysicsParams::cue_end_mass_kg, 0.0005, 1},

@@ -123,6 +123,12 @@ struct PhysicsParams {
   double f_cushion_mathavan = 0.14;    ///< kMathavan2010: ball-cushion sliding friction
   double cushion_impulse_steps = 500;  ///< kMathavan2010: fallback step, 1/N of a (1+e) m v_n impact
   double cushion_poisson_ratio = 0.5;  ///< kStrongeCompliant: the cushion rubber's Poisson ratio
+  /// p: the cushion's restitution falls with the approach speed v_n across the cushion line,
+  /// e(v_n) = 1 - (1 - e) (v_n / 1 m/s)^p clamped to [0, 1], e being the model's restitution
+  /// (e_cushion, or e_cushion_mathavan) read as its value at 1 m/s. 0, the default, keeps it
+  /// constant; 1/5 is a viscoelastic sphere's law (docs/billiards.md, "Restitution that falls
+  /// with speed"). Every cushion model but the mirror.
+  double cushion_restitution_exponent = 0.0;
   double cushion_height_m = 0.036;     ///< h: cushion nose above the slate (m); R < h < 2R
   double cue_mass_kg = 0.54;           ///< M: cue mass (kg), 19 oz
   double cue_end_mass_kg = 0.170 / 30; ///< m_e: the cue's effective end mass for squirt (kg)

@@ -315,7 +315,7 @@ class CliAgainstServer(unittest.TestCase):
         names = {p["name"] for p in caps["parameters"]}
         for name in ("gravity_mps2", "mu_slide", "mu_roll", "spin_decel_rps2", "e_ball",
                      "e_cushion", "f_cushion", "ball_radius_m", "ball_mass_kg", "cue_mass_kg",
-                     "slide_fade_speed_mps", "slide_fade_bands"):
+                     "slide_fade_speed_mps", "slide_fade_bands", "cushion_restitution_exponent"):
             self.assertIn(name, names)
         self.assertIn("sportsim.v1.Billiards", caps["services"])
         # The design's names: build, capabilities.presets (the same list as table_presets).

@@ -1,7 +1,9 @@
 // The billiards engines on small random scenes: 2-6 balls placed where ValidateLayout accepts
 // them (anywhere on the cloth, some frozen against another ball) on a pool-9ft, snooker or carom
 // table with Han's cushions, or a pool-9ft or carom one with Stronge's compliant cushions (a
-// stiff rubber on the pool table) or with slip-speed friction, a cue strike decoded from the bytes, then both engines (event and stepped), advanced in
+// stiff rubber on the pool table) or with slip-speed friction, or a restitution falling steeply
+// with speed (plastic impacts at pace: Han's on the pool table, Stronge's on the carom one), a
+// cue strike decoded from the bytes, then both engines (event and stepped), advanced in
 // chunks (a server's ticks) under a small time budget and event cap. Invariants:
 // - every ball's position, velocity, spin and orientation finite after every chunk;
 // - events in time order, inside the chunk that reported them, with valid indices;
@@ -207,6 +209,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       b::TableSpec s = *b::MakeTablePreset(p);
       s.params.slide_fade_speed_mps = fade;
       s.params.slide_fade_bands = bands;
+      m.push_back(*b::TableModel::Create(s));
+    }
+    // The cushion's restitution falling with speed: to nothing above 2.6 m/s on the pool table
+    // (p = 2 from 0.85), as the square root on the carom one with Stronge's nose.
+    for (const auto& [p, cm, exponent] :
+         {std::tuple{"pool-9ft", b::CushionModel::kHan, 2.0},
+          {"carom", b::CushionModel::kStrongeCompliant, 0.5}}) {
+      b::TableSpec s = *b::MakeTablePreset(p);
+      s.params.cushion_model = cm;
+      s.params.cushion_restitution_exponent = exponent;
       m.push_back(*b::TableModel::Create(s));
     }
     return m;

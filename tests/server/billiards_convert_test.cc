@@ -218,6 +218,16 @@ TEST(BilliardsConvertTest, CushionModelMirror) {
   absl::Status bad = ShotJobFromProto(r).status();
   EXPECT_EQ(bad.code(), absl::StatusCode::kInvalidArgument);
   EXPECT_THAT(bad.message(), ::testing::HasSubstr("slide_fade_bands must be a whole number"));
+  // The cushion restitution's fall with speed, by name too; past its range, refused naming it.
+  r.mutable_table()->clear_params();
+  (*r.mutable_table()->mutable_params())["cushion_restitution_exponent"] = 0.5;
+  job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().cushion_restitution_exponent, 0.5);
+  (*r.mutable_table()->mutable_params())["cushion_restitution_exponent"] = -0.1;
+  bad = ShotJobFromProto(r).status();
+  EXPECT_EQ(bad.code(), absl::StatusCode::kInvalidArgument);
+  EXPECT_THAT(bad.message(), ::testing::HasSubstr("cushion_restitution_exponent"));
 }
 
 TEST(BilliardsConvertTest, OtherPresetsTakeTheirGamesRack) {

@@ -884,6 +884,30 @@ TEST(CalibrateTest, ReadsTheSlipSpeedFrictionBack) {
   EXPECT_LT(r->train_after_m, 1.4e-3);   // the fade fits them to the noise (1.25 mm)
 }
 
+// A cushion whose restitution falls with speed (p = 0.5) read back from three noisy shots: the
+// calibration, started at the constant law, finds p within four standard errors, and the
+// tracks to the noise.
+TEST(CalibrateTest, ReadsTheRestitutionsFallWithSpeedBack) {
+  TableSpec falling = TrueTable();
+  falling.params.cushion_restitution_exponent = 0.5;
+  const TableModel truth = *TableModel::Create(falling);
+  const std::vector<Recording> recs = Recordings(truth, 3, 1e-3, 23);
+  TableSpec start = falling;
+  start.params.cushion_restitution_exponent = 0.0;
+  CalibrationOptions o;
+  o.params = {{.name = "cushion_restitution_exponent"}};
+  absl::StatusOr<CalibrationReport> r = Calibrate(start, SolverOptions{}, recs, o);
+  ASSERT_TRUE(r.ok()) << r.status();
+  ASSERT_EQ(r->fitted.size(), 1u);
+  EXPECT_EQ(r->fitted[0].hi, 1.0);  // the default range
+  const double se = r->fitted[0].standard_error;
+  EXPECT_GT(se, 0.0);
+  EXPECT_LT(se, 0.05);
+  EXPECT_NEAR(r->params.cushion_restitution_exponent, 0.5, 4.0 * se) << "standard error " << se;
+  EXPECT_GT(r->train_before_m, 3e-3);   // the constant law is off these tracks
+  EXPECT_LT(r->train_after_m, 1.4e-3);  // the law fits them to the noise (1.25 mm)
+}
+
 // The same calibration twice gives bit-identical parameters and strikes; the held-out shot is
 // scored on all its points though its strike saw half a second of them; a recording whose
 // strike is known keeps it.

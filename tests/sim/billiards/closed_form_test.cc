@@ -1768,6 +1768,60 @@ INSTANTIATE_TEST_SUITE_P(AllEngines, ClosedFormTest,
                          Name);
 
 
+// --- The cushion's restitution falling with the approach speed. ------------------------------
+
+// e(v) = 1 - (1 - e) v^p for an approach at v m/s, within [0, 1]: e itself at 1 m/s, the
+// constant law at p = 0, plastic below the resting speed.
+TEST(CushionRestitutionTest, FallsWithTheApproachAsItsLawSays) {
+  EXPECT_EQ(CushionRestitution(0.85, 0.0, 3.0), 0.85);
+  EXPECT_EQ(CushionRestitution(0.85, 0.7, 1.0), 0.85);
+  EXPECT_NEAR(CushionRestitution(0.85, 0.2, 3.0), 1.0 - 0.15 * std::pow(3.0, 0.2), 1e-15);
+  EXPECT_NEAR(CushionRestitution(0.85, 1.0, 0.5), 0.925, 1e-15);
+  EXPECT_EQ(CushionRestitution(0.85, 1.0, 8.0), 0.0);   // 1 - 1.2: plastic, not negative
+  EXPECT_EQ(CushionRestitution(0.0, 2.0, 0.01), 1.0 - 1e-4);
+  EXPECT_EQ(CushionRestitution(0.85, 0.5, 0.5 * kRestingContactSpeed), 0.0);
+}
+
+// Without friction Han's and Stronge's square rebound is v ((1 + e(v)) cos^2 - 1) (the impulse
+// is along the contact normal, tilted down by the nose's angle theta, and the slate takes its
+// vertical part), Mathavan's is e(v) v; each model reads its own restitution through the law;
+// at p = 0 every impact is the constant law's, bit for bit.
+TEST(CushionRestitutionTest, EveryModelTakesItsRestitutionFromTheLaw) {
+  for (double p : {0.2, 1.0}) {
+    for (double v : {0.3, 1.0, 2.5, 3.5}) {
+      for (CushionModel cm : {CushionModel::kHan, CushionModel::kStrongeCompliant}) {
+        const TableModel model = MakeModel(
+            "pool-9ft", {{"f_cushion", 0.0}, {"e_cushion", 0.9}, {"cushion_restitution_exponent", p}}, cm);
+        const double c2 = 1.0 - model.cushion_sin() * model.cushion_sin();
+        const double e = 1.0 - 0.1 * std::pow(v, p);
+        const Ball b = CushionImpact(model, {0.0, v, 0.0}, Eigen::Vector3d::Zero());
+        EXPECT_NEAR(b.v.y(), v * (1.0 - (1.0 + e) * c2), 1e-14) << "p " << p << ", v " << v;
+      }
+      const TableModel model = MakeModel(
+          "carom", {{"e_cushion_mathavan", 0.95}, {"cushion_restitution_exponent", p}},
+          CushionModel::kMathavan2010);
+      const Eigen::Vector3d v_in(0.4, v, 0.0), w_in(-20.0, 5.0, 30.0);
+      Ball want = MakeBall(model, "b", {0.0, 0.0}, v_in, w_in);
+      CollideCushionMathavan(model, Eigen::Vector3d(0.0, -1.0, 0.0),
+                             CushionRestitution(0.95, p, v), model.params().f_cushion_mathavan,
+                             model.params().mu_slide, &want);
+      const Ball got = CushionImpact(model, v_in, w_in);
+      EXPECT_EQ(got.v, want.v) << "p " << p << ", v " << v;
+      EXPECT_EQ(got.w, want.w) << "p " << p << ", v " << v;
+    }
+  }
+  for (CushionModel cm : {CushionModel::kHan, CushionModel::kStrongeCompliant,
+                          CushionModel::kMathavan2010}) {
+    const TableModel plain = MakeModel("carom", {}, cm);
+    const TableModel zero = MakeModel("carom", {{"cushion_restitution_exponent", 0.0}}, cm);
+    for (const Ball& in : RandomApproaches(plain, 77, 40)) {
+      const Ball a = CushionImpact(plain, in.v, in.w), b = CushionImpact(zero, in.v, in.w);
+      EXPECT_EQ(a.v, b.v);
+      EXPECT_EQ(a.w, b.w);
+    }
+  }
+}
+
 // --- The cushion models and the ball-ball impact against an independent implementation. -----
 
 // The rebound of pooltool's own code for each cushion model (github.com/ekiefl/pooltool, commit
