@@ -38,6 +38,7 @@ TableSpec CaromWith(double mu_slide, double mu_roll, double spin_decel, double e
   s.params.f_cushion = f_cushion;
   s.params.e_cushion_mathavan = 0.98;
   s.params.f_cushion_mathavan = 0.14;
+  s.params.cushion_restitution_exponent = 0.0;  // a constant restitution
   return s;
 }
 

@@ -1646,27 +1646,30 @@ TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
     // from the tracks"), faster than the FAQ's pool cloth.
     EXPECT_GE(p.mu_roll, s.preset == "carom" ? 0.0043 : 0.005);
     EXPECT_LE(p.mu_roll, s.preset == "carom" ? 0.0052 : 0.015);
-    // Its side spin's decay is calibrated on the same table's shots (3.05 and 3.14 on two
+    // Its side spin's decay is calibrated on the same table's shots (3.83 and 4.68 on two
     // pairs of them), slower than the FAQ's pool cloth.
-    EXPECT_GE(p.spin_decel_rps2, s.preset == "carom" ? 3.0 : 5.0);
-    EXPECT_LE(p.spin_decel_rps2, s.preset == "carom" ? 3.2 : 15.0);
+    EXPECT_GE(p.spin_decel_rps2, s.preset == "carom" ? 3.8 : 5.0);
+    EXPECT_LE(p.spin_decel_rps2, s.preset == "carom" ? 4.7 : 15.0);
     EXPECT_GE(p.e_ball, 0.92);
     EXPECT_LE(p.e_ball, 0.98);
     EXPECT_GE(p.e_cushion, 0.6);
     // The snooker preset's cushion is a measured table's (below), livelier than the FAQ's;
-    // the carom preset's is calibrated on a tracked carom table (0.862 and 0.875).
-    EXPECT_LE(p.e_cushion, s.preset == "snooker" ? 0.95 : 0.9);
+    // the carom preset's is calibrated on a tracked carom table (0.883 and 0.901 at 1 m/s,
+    // the restitution falling with speed as its 0.46th and 0.50th powers on two pairs).
+    EXPECT_LE(p.e_cushion, s.preset == "snooker" ? 0.95 : 0.905);
     if (s.preset == "carom") {
-      EXPECT_GE(p.e_cushion, 0.86);
-      EXPECT_LE(p.e_cushion, 0.88);
-      // Mathavan's cushion, calibrated on the same shots (0.877-0.901 and 0.199-0.200).
-      EXPECT_GE(p.e_cushion_mathavan, 0.87);
-      EXPECT_LE(p.e_cushion_mathavan, 0.91);
-      EXPECT_GE(p.f_cushion_mathavan, 0.19);
-      EXPECT_LE(p.f_cushion_mathavan, 0.21);
-    } else {  // the constants Mathavan et al. fitted to their snooker cushion
+      EXPECT_GE(p.e_cushion, 0.88);
+      EXPECT_GE(p.cushion_restitution_exponent, 0.46);
+      EXPECT_LE(p.cushion_restitution_exponent, 0.50);
+      // Mathavan's cushion, calibrated on the same shots (0.886-0.899 and 0.179-0.185).
+      EXPECT_GE(p.e_cushion_mathavan, 0.88);
+      EXPECT_LE(p.e_cushion_mathavan, 0.90);
+      EXPECT_GE(p.f_cushion_mathavan, 0.175);
+      EXPECT_LE(p.f_cushion_mathavan, 0.19);
+    } else {  // the constants Mathavan et al. fitted to their snooker cushion, held constant
       EXPECT_EQ(p.e_cushion_mathavan, 0.98);
       EXPECT_EQ(p.f_cushion_mathavan, 0.14);
+      EXPECT_EQ(p.cushion_restitution_exponent, 0.0);
     }
   }
 }
@@ -1784,10 +1787,10 @@ TEST(CushionRestitutionTest, FallsWithTheApproachAsItsLawSays) {
 
 // Without friction Han's and Stronge's square rebound is v ((1 + e(v)) cos^2 - 1) (the impulse
 // is along the contact normal, tilted down by the nose's angle theta, and the slate takes its
-// vertical part), Mathavan's is e(v) v; each model reads its own restitution through the law;
-// at p = 0 every impact is the constant law's, bit for bit.
+// vertical part), Mathavan's is e(v) v; each model reads its own restitution through the law,
+// and at p = 0 the constant one.
 TEST(CushionRestitutionTest, EveryModelTakesItsRestitutionFromTheLaw) {
-  for (double p : {0.2, 1.0}) {
+  for (double p : {0.0, 0.2, 1.0}) {
     for (double v : {0.3, 1.0, 2.5, 3.5}) {
       for (CushionModel cm : {CushionModel::kHan, CushionModel::kStrongeCompliant}) {
         const TableModel model = MakeModel(
@@ -1808,16 +1811,6 @@ TEST(CushionRestitutionTest, EveryModelTakesItsRestitutionFromTheLaw) {
       const Ball got = CushionImpact(model, v_in, w_in);
       EXPECT_EQ(got.v, want.v) << "p " << p << ", v " << v;
       EXPECT_EQ(got.w, want.w) << "p " << p << ", v " << v;
-    }
-  }
-  for (CushionModel cm : {CushionModel::kHan, CushionModel::kStrongeCompliant,
-                          CushionModel::kMathavan2010}) {
-    const TableModel plain = MakeModel("carom", {}, cm);
-    const TableModel zero = MakeModel("carom", {{"cushion_restitution_exponent", 0.0}}, cm);
-    for (const Ball& in : RandomApproaches(plain, 77, 40)) {
-      const Ball a = CushionImpact(plain, in.v, in.w), b = CushionImpact(zero, in.v, in.w);
-      EXPECT_EQ(a.v, b.v);
-      EXPECT_EQ(a.w, b.w);
     }
   }
 }
@@ -1897,7 +1890,8 @@ const PooltoolRebound kPooltoolRebounds[] = {
 TEST(CushionModelsTest, AgreeWithPooltool) {
   for (const PooltoolRebound& c : kPooltoolRebounds) {
     const std::vector<std::pair<std::string_view, double>> params = {
-        {"e_cushion", 0.85}, {"f_cushion", 0.2}, {"cushion_poisson_ratio", 0.5}};
+        {"e_cushion", 0.85}, {"f_cushion", 0.2}, {"cushion_poisson_ratio", 0.5},
+        {"cushion_restitution_exponent", 0.0}};
     const TableModel han = MakeModel(c.table, params, CushionModel::kHan);
     const TableModel stronge = MakeModel(c.table, params, CushionModel::kStrongeCompliant);
     const double radius = han.radius();
