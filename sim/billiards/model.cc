@@ -220,9 +220,10 @@ absl::StatusOr<TableSpec> MakeTablePreset(std::string_view name) {
     t.params.mu_roll = 0.0047;
     t.params.mu_slide = 0.175;
     // The cushion's restitution falls with the approach speed, as its 0.47th power: what
-    // Mathavan's model reads on the same shots (0.47 +- 0.013 on all four, 0.46 and 0.50 on
-    // two pairs, each pair's held-out shots 4.5-9 mm closer than at a constant restitution;
-    // docs/billiards.md, "Restitution that falls with speed").
+    // Mathavan's model reads on all four shots (0.47 +- 0.013; the pairs and the other models
+    // read 0.29-0.70), and at which every model's held-out shots come closer than at a
+    // constant restitution (docs/billiards.md, "The restitution's fall with speed, read on the
+    // same shots").
     t.params.cushion_restitution_exponent = 0.47;
     // Han's cushion and the side spin's decay on that cloth and that law, calibrated on the
     // same shots with the cloth held (`table calibrate --param cushion_restitution_exponent=0.47

@@ -1654,13 +1654,14 @@ TEST(PresetTest, PresetsLieWithinTheirGoverningBodiesSpecifications) {
     EXPECT_LE(p.e_ball, 0.98);
     EXPECT_GE(p.e_cushion, 0.6);
     // The snooker preset's cushion is a measured table's (below), livelier than the FAQ's;
-    // the carom preset's is calibrated on a tracked carom table (0.883 and 0.901 at 1 m/s,
-    // the restitution falling with speed as its 0.46th and 0.50th powers on two pairs).
+    // the carom preset's is calibrated on a tracked carom table (0.883 and 0.901 at 1 m/s on
+    // two pairs, the restitution falling with speed as its 0.47th power; that table's shots
+    // read powers of 0.29-0.70).
     EXPECT_LE(p.e_cushion, s.preset == "snooker" ? 0.95 : 0.905);
     if (s.preset == "carom") {
       EXPECT_GE(p.e_cushion, 0.88);
-      EXPECT_GE(p.cushion_restitution_exponent, 0.46);
-      EXPECT_LE(p.cushion_restitution_exponent, 0.50);
+      EXPECT_GE(p.cushion_restitution_exponent, 0.29);
+      EXPECT_LE(p.cushion_restitution_exponent, 0.70);
       // Mathavan's cushion, calibrated on the same shots (0.886-0.899 and 0.179-0.185).
       EXPECT_GE(p.e_cushion_mathavan, 0.88);
       EXPECT_LE(p.e_cushion_mathavan, 0.90);
