@@ -3,6 +3,7 @@ against it, checking the JSON of the command-line contract (docs/cli.md), exit c
 import csv
 import io
 import json
+import math
 import os
 import re
 import select
@@ -405,6 +406,31 @@ class CliAgainstServer(unittest.TestCase):
         r = cli(self.server.address, *shot, "--param", "slide_fade_bands=2.5")
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("slide_fade_bands must be a whole number", r.stderr)
+
+    def test_cushion_restitution_falls_with_speed(self):
+        # A stun ball square into the top rail of the pool table, frictionless there: Han's
+        # rebound is v (1 - (1 + e) cos^2 theta), the restitution e = 1 - (1 - e_c) v^p at
+        # the arrival speed v (e_c 0.85, the nose at 63.5 % of the diameter, the slide to the
+        # rail at mu_s g = 0.2 g).
+        radius = 0.028575
+        sin_theta = (0.635 * 2 * radius - radius) / radius
+        cos2 = 1 - sin_theta * sin_theta
+        gap = 1.27 / 2 - radius * math.sqrt(cos2) - 0.5
+        arrival = math.sqrt(3.0 * 3.0 - 2 * 0.2 * 9.81 * gap)
+        shot = ("--format", "json", "shot", "simulate", "--table", "pool-9ft", "--rack",
+                "empty", "--ball", "cue@0.6,0.5", "--ball-speed", "3", "--phi", "90",
+                "--param", "f_cushion=0")
+        for p in (0.0, 0.5, 1.0):
+            r = cli(self.server.address, *shot, "--param",
+                    "cushion_restitution_exponent=%g" % p)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            hit = [e for e in json.loads(r.stdout)["events"] if e["kind"] == "ball_cushion"][0]
+            e = 1 - 0.15 * arrival ** p
+            self.assertAlmostEqual(hit["after"][0]["vy_mps"], arrival * (1 - (1 + e) * cos2),
+                                   places=9)
+        r = cli(self.server.address, *shot, "--param", "cushion_restitution_exponent=3")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("cushion_restitution_exponent", r.stderr)
 
     def test_cushion_models(self):
         # A stun ball into the top rail, slightly off square (still sliding when it gets
