@@ -53,7 +53,9 @@ class CalibrationTest : public ::testing::Test {
     channel_ = grpc::CreateChannel(app_->address(), grpc::InsecureChannelCredentials());
     stub_ = v1::Billiards::NewStub(channel_);
   }
-  std::unique_ptr<grpc::ClientContext> Ctx(int seconds = 120) {
+  // A deadline far past a calibration's time here: 3-5 s in Release, 21-52 s under ASan on an
+  // idle 2-core machine, and past 120 s under ASan with builds sharing the cores.
+  std::unique_ptr<grpc::ClientContext> Ctx(int seconds = 300) {
     auto c = std::make_unique<grpc::ClientContext>();
     c->set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(seconds));
     return c;
