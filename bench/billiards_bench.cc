@@ -235,6 +235,54 @@ BENCHMARK(BM_CushionImpact)
                    {0, 1, 2}})
     ->Unit(benchmark::kNanosecond);
 
+// One ball-ball impact per iteration, cycling through 256 approaches on the pool table.
+// range(0): the BallBallModel (0 TP A-14's single impulse, 1 Mathavan's 2014 integration);
+// range(1): the approaches, 0 a rolling cue ball at 0.3-4 m/s cutting a ball at rest at 0-80
+// deg with side spin up to half its speed's worth (the common impact in play), 1 random (both
+// balls moving, every spin component up to 150 rad/s).
+void BM_BallImpact(benchmark::State& state) {
+  TableSpec spec = *MakeTablePreset("pool-9ft");
+  spec.params.ball_ball_model = static_cast<BallBallModel>(state.range(0));
+  const TableModel model = *TableModel::Create(spec);
+  const bool random = state.range(1) == 1;
+  state.SetLabel(std::string(state.range(0) == 0 ? "alciatore" : "mathavan2014") +
+                 (random ? ", random" : ", rolling cut"));
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double radius = model.radius();
+  std::vector<std::pair<Ball, Ball>> pairs;
+  while (pairs.size() < 256) {
+    Ball a, b;
+    a.r = {0.0, 0.0, radius};
+    const double cut = random ? kPi * u(rng) : DegToRad(40.0 + 40.0 * u(rng));
+    b.r = {2.0 * radius * std::cos(cut), 2.0 * radius * std::sin(cut), radius};
+    if (random) {
+      a.v = {3.0 * u(rng), 3.0 * u(rng), 0.0};
+      b.v = {u(rng), u(rng), 0.0};
+      a.w = {150.0 * u(rng), 150.0 * u(rng), 150.0 * u(rng)};
+      b.w = {150.0 * u(rng), 150.0 * u(rng), 150.0 * u(rng)};
+    } else {
+      const double speed = 2.15 + 1.85 * u(rng);
+      a.v = {speed, 0.0, 0.0};
+      a.w = Eigen::Vector3d::UnitZ().cross(a.v) / radius;
+      a.w.z() = 0.5 * u(rng) * speed / radius;
+    }
+    if ((a.v - b.v).dot(b.r - a.r) <= 0.0) continue;
+    a.state = Classify(model, a);
+    b.state = Classify(model, b);
+    pairs.emplace_back(a, b);
+  }
+  size_t i = 0;
+  for (auto _ : state) {
+    auto [a, b] = pairs[i++ % pairs.size()];
+    CollideBalls(model, 0, &a, &b);
+    benchmark::DoNotOptimize(a);
+    benchmark::DoNotOptimize(b);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_BallImpact)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kNanosecond);
+
 // The cloth read from tracks (ReadCloth, what CalibrationOptions::read_cloth does before a
 // calibration): eight random three-ball carom shots at 2-4 m/s, tracked with 1 mm noise at
 // range(0) Hz (50: a match tracker; 250: a fast camera, five times the points and finer roll

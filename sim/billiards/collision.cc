@@ -31,6 +31,10 @@ bool Closing(const Ball& a, const Ball& b, Eigen::Vector3d* n, Eigen::Vector3d* 
 
 }  // namespace
 
+double BallFriction(const PhysicsParams& p, double slip) {
+  return p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * slip);
+}
+
 bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
   Eigen::Vector3d n, v_rel;
   double approach = 0.0;
@@ -46,8 +50,15 @@ bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
     const Eigen::Vector3d u = v_rel + radius * (a->w + b->w).cross(n);
     const Eigen::Vector3d ut = u - u.dot(n) * n;
     const double slip = ut.norm();
+    if (p.ball_ball_model == BallBallModel::kMathavan2014) {
+      // TP A-14's friction at the slip the impact starts with, held through it.
+      CollideBallsMathavan(model, n, e, BallFriction(p, slip), p.mu_slide, a, b);
+      a->state = Classify(model, *a);
+      b->state = Classify(model, *b);
+      return true;
+    }
     if (slip > 0.0) {
-      const double mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * slip);
+      const double mu = BallFriction(p, slip);
       const double pt = std::min(mu * jn, m * slip / 7.0);
       const Eigen::Vector3d friction = -(pt / slip) * ut;
       impulse_a += friction;
@@ -64,6 +75,214 @@ bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b) {
   a->state = Classify(model, *a);
   b->state = Classify(model, *b);
   return true;
+}
+
+// Mathavan, Jackson and Parkin (2014), integrated over the normal impulse P at the balls'
+// contact. The contact frame: n from a to b, t = z x n, z up. The state is both balls' (v_n,
+// v_t, w_n, w_t, w_z) and W, the integral of the approach (v_a - v_b).n over P. Per dP the
+// balls take -n and +n; the contact's friction f = (f_t, f_z) on a (-f on b) opposes its slip
+//   u = (v_at - v_bt + R (w_az + w_bz), -R (w_at + w_bt)),
+// f = -mu u^ while it slides. Its vertical part presses one ball into the cloth (a where f_z <
+// 0, b where f_z > 0) with the load |f_z|, gravity being nothing beside the impulse, and lifts
+// the other, which the slate then does not touch; the pressed ball's cloth contact, its bottom
+// point, slips at s = (v_n - R w_t, v_t + R w_n) and takes the cloth's sliding friction,
+// mu_table times the load against s. With f and the cloth's friction g_k on ball k (k = a, b),
+// the rates are (kv = 1/m, kw = R/I, the normal impulse's sign -1 for a and +1 for b, f's +1
+// and -1):
+//   dv_n = kv (sign + g_n),  dv_t = kv (+-f_t + g_t),  dw_n = kw g_t,
+//   dw_t = kw (-f_z - g_n),  dw_z = kw f_t,  dW = (v_a - v_b).n.
+// Alone, the contact's friction closes its slip along itself in t (its rate is 7 f_t / m) and
+// more slowly in z (5 f_z / m: both balls' centres held on the slate), so the slip turns as
+// it closes; once it is closed it stays so with no friction at all (the normal impulse moves
+// no tangential slip, and without f there is no load). A cloth contact never sticks during the
+// impact: its slip is driven by the normal impulse at 1/m, more than its friction (at most
+// 3.5 mu_table mu / m, 0.08 / m for pool) can hold. Compression ends where the approach falls
+// to zero; restitution where W has come down to (1 - e^2) of its value then.
+namespace {
+
+using PairState = Eigen::Matrix<double, 11, 1>;
+
+class PairImpact {
+ public:
+  PairImpact(double m, double radius, double mu, double mu_table, double floor)
+      : radius_(radius), mu_(mu), mu_table_(mu_table), kv_(1.0 / m),
+        kw_(2.5 / (m * radius)), floor_(floor) {}
+
+  Eigen::Vector2d BallSlip(const PairState& z) const {
+    return {z[1] - z[6] + radius_ * (z[4] + z[9]), -radius_ * (z[3] + z[8])};
+  }
+  Eigen::Vector2d ClothSlip(int k, const PairState& z) const {
+    const int o = 5 * k;
+    return {z[o] - radius_ * z[o + 3], z[o + 1] + radius_ * z[o + 2]};
+  }
+  static double Approach(const PairState& z) { return z[0] - z[5]; }
+
+  // The contact's friction per dP: against the slip while it slides; none once it is stuck.
+  Eigen::Vector2d Friction(const PairState& z, bool stuck) const {
+    if (stuck) return Eigen::Vector2d::Zero();
+    const Eigen::Vector2d u = BallSlip(z);
+    const double n = u.norm();
+    return n > floor_ ? Eigen::Vector2d(-mu_ * u / n) : Eigen::Vector2d::Zero();
+  }
+
+  // The rates per dP under the contact's friction f, with the normal impulse (`normal` 1) or
+  // for the friction impulse f alone (`normal` 0, no cloth friction: a landing's jump).
+  PairState Rates(const PairState& z, const Eigen::Vector2d& f, double normal = 1.0) const {
+    PairState d;
+    for (int k : {0, 1}) {
+      const int o = 5 * k;
+      const double sign = k == 0 ? -1.0 : 1.0;
+      const double ft = k == 0 ? f[0] : -f[0];
+      const double load = normal > 0.0 ? std::max(0.0, sign * f[1]) : 0.0;  // f_z < 0 presses a
+      Eigen::Vector2d g = Eigen::Vector2d::Zero();
+      if (load > 0.0 && mu_table_ > 0.0) {
+        Eigen::Vector2d s = ClothSlip(k, z);
+        if (!(s.norm() > floor_)) {
+          // A slip at zero: its rate without the cloth's friction is r0, and the bottom point
+          // answers a force there at 3.5/m in every direction. The friction holds it if it can
+          // (never with pool's constants: see above); else the slip leaves along r0, which
+          // the friction, opposing it, only slows.
+          const Eigen::Vector2d r0(kv_ * sign * normal + radius_ * kw_ * f[1], kv_ * ft);
+          if (r0.norm() <= 3.5 * kv_ * mu_table_ * load) {
+            g = -r0 / (3.5 * kv_);
+            s.setZero();
+          } else {
+            s = r0;
+          }
+        }
+        const double n = s.norm();
+        if (n > 0.0) g = -(mu_table_ * load / n) * s;
+      }
+      d[o] = kv_ * (sign * normal + g[0]);
+      d[o + 1] = kv_ * (ft + g[1]);
+      d[o + 2] = kw_ * g[1];
+      d[o + 3] = kw_ * (-f[1] - g[0]);
+      d[o + 4] = kw_ * f[0];
+    }
+    d[10] = normal > 0.0 ? Approach(z) : 0.0;
+    return d;
+  }
+
+  PairState operator()(const PairState& z, bool stuck) const {
+    return Rates(z, Friction(z, stuck));
+  }
+
+  // The state change of the friction impulse that closes the contact's slip u: (m u_t / 7,
+  // m u_z / 5) against it.
+  PairState Closing(const PairState& z) const {
+    const Eigen::Vector2d u = BallSlip(z);
+    return Rates(z, Eigen::Vector2d(-u[0] / (7.0 * kv_), -u[1] / (5.0 * kv_)), 0.0);
+  }
+
+  double radius() const { return radius_; }
+
+ private:
+  double radius_, mu_, mu_table_, kv_, kw_, floor_;
+};
+
+}  // namespace
+
+// The rates are smooth between a few switches: the contact's slip landing on zero (after which
+// nothing but the normal impulse acts, and the rest is exact), the end of compression, the end
+// of restitution, and a pressed ball's cloth slip passing zero (where its friction turns at
+// once: a kink the error control steps through). The impact is integrated by Dormand and
+// Prince's 5(4) pair under error control (each step's error within kMathavanPairTolerance of
+// the balls' speed, in v and R w). No step goes past where the present rates would close the
+// contact's slip or end the phase; the slip lands once within `landing` of zero and the rest
+// of it is closed at once (its friction impulse, (m u_t / 7, m u_z / 5), exact but for the
+// cloth friction that impulse would bring, second order in the slip left).
+void CollideBallsMathavan(const TableModel& model, const Eigen::Vector3d& n, double e,
+                          double mu, double mu_table, Ball* a, Ball* b) {
+  constexpr double kMathavanPairTolerance = 1e-10;
+  const Eigen::Vector3d ez = Eigen::Vector3d::UnitZ(), et = ez.cross(n);
+  const double m = model.mass(), radius = model.radius();
+  PairState z;
+  z << a->v.dot(n), a->v.dot(et), a->w.dot(n), a->w.dot(et), a->w.dot(ez), b->v.dot(n),
+      b->v.dot(et), b->w.dot(n), b->w.dot(et), b->w.dot(ez), 0.0;
+  const double speed =
+      a->v.norm() + b->v.norm() + radius * (a->w.norm() + b->w.norm());
+  const double tol = kMathavanPairTolerance * speed;
+  const double landing = 1e-9 * speed;
+  const PairImpact rates(m, radius, mu, mu_table, 1e-12 * speed);
+  const double total = (1.0 + e) * 0.5 * m * PairImpact::Approach(z);
+  auto error_of = [radius](const PairState& err) {
+    double worst = 0.0;
+    for (int k : {0, 5}) {
+      worst = std::max({worst, std::abs(err[k]), std::abs(err[k + 1]),
+                        radius * std::abs(err[k + 2]), radius * std::abs(err[k + 3]),
+                        radius * std::abs(err[k + 4])});
+    }
+    return worst;
+  };
+  bool stuck = false;
+  auto land = [&] {
+    z += rates.Closing(z);
+    stuck = true;
+  };
+  if (rates.BallSlip(z).norm() <= landing) land();
+  bool compressing = true, rejected = false;
+  double target = 0.0, h = 0.125 * total;
+  // The pair's steps go down to h_min (a kink's error needs steps of about tol / (mu_table mu),
+  // 1e-8 of the impact). Should it take more than kSmallSteps of them (a cloth slip that could
+  // stick chatters about zero: outside pool's constants), the rest is taken in steps of
+  // 1/kFallbackSteps of the impact, error control off, a slip that then crosses zero landing.
+  constexpr int kSmallSteps = 500, kFallbackSteps = 1000;
+  const double h_min = 1e-9 * total;
+  int small_steps = 0;
+  PairState k1 = rates(z, stuck), next, k_next;
+  ode::Dp45Stages<PairState> stages;
+  auto f = [&](double /*p*/, const PairState& s) { return rates(s, stuck); };
+  // Guards only: the fallback alone ends it.
+  for (int k = 0; k < 4 * (kSmallSteps + kFallbackSteps); ++k) {
+    const bool fallback = small_steps > kSmallSteps;
+    // How far the present rates would carry the phase to its end, and a sliding slip to zero.
+    double ahead;
+    if (compressing) {
+      ahead = -PairImpact::Approach(z) / PairImpact::Approach(k1);
+    } else {
+      // W + q h + r h^2 / 2 = target, q = the approach (< 0) and r its rate (< 0).
+      const double q = k1[10], r = PairImpact::Approach(k1), left = z[10] - target;
+      ahead = 2.0 * left / (-q + std::sqrt(std::max(0.0, q * q - 2.0 * r * left)));
+    }
+    const bool phase_limited = !(h < ahead);
+    double taken = std::min(h, ahead);
+    if (!stuck) {
+      const Eigen::Vector2d u = rates.BallSlip(z), du = rates.BallSlip(k1);
+      const double closing = -du.dot(u) / u.norm();
+      if (closing > 0.0 && u.norm() / closing < taken) taken = u.norm() / closing;
+    }
+    taken = std::max(taken, std::min(fallback ? total / kFallbackSteps : h_min, ahead));
+    if (taken <= h_min) ++small_steps;
+    next = ode::Dp45Solution(f, 0.0, taken, z, k1, &stages, taken);
+    k_next = rates(next, stuck);
+    const double err = error_of(ode::Dp45Error(taken, k1, stages, k_next));
+    const bool overshot = !stuck && rates.BallSlip(next).dot(rates.BallSlip(z)) < 0.0;
+    if (!fallback && (!(err <= tol) || overshot) && taken > h_min) {
+      h = std::max(h_min, taken * (overshot ? 0.5 : ode::Dp45StepFactor(err / tol, rejected)));
+      rejected = true;
+      continue;
+    }
+    z = next;
+    k1 = k_next;
+    if (!stuck && (overshot || rates.BallSlip(z).norm() <= landing)) {
+      land();
+      k1 = rates(z, stuck);
+    }
+    if (compressing && PairImpact::Approach(z) <= 1e-13 * speed) {
+      compressing = false;
+      target = (1.0 - e * e) * z[10];
+      if (e == 0.0) break;
+    } else if (!compressing && z[10] - target <= 1e-13 * speed * total) {
+      break;
+    }
+    if (!phase_limited) h = std::min(total, taken * ode::Dp45StepFactor(err / tol, rejected));
+    rejected = false;
+  }
+  // The slate takes any vertical velocity: both balls stay on it.
+  a->v = z[0] * n + z[1] * et;
+  a->w = z[2] * n + z[3] * et + z[4] * ez;
+  b->v = z[5] * n + z[6] * et;
+  b->w = z[7] * n + z[8] * et + z[9] * ez;
 }
 
 namespace {
@@ -153,7 +372,7 @@ bool CollideBallsResting(const TableModel& model, uint32_t effects, Ball* a, Bal
     const double slip = ut.norm();
     if (slip > 0.0) {
       t = ut / slip;  // friction on a is -pt t
-      mu = p.mu_ball_a + p.mu_ball_b * std::exp(-p.mu_ball_c_spm * slip);
+      mu = BallFriction(p, slip);
       cap = m * slip / 7.0;
       kt = (Response(model, ra, -t, rca) - Response(model, rb, t, rcb)).dot(n);
     }

@@ -10,6 +10,7 @@
 //   slip, 7 being the two balls' combined effective inverse mass at the contact
 //   (1 + 1 + 5/2 + 5/2).
 //   The vertical part of the velocity change goes into the slate.
+//   BallBallModel::kMathavan2014 integrates the impact instead (CollideBallsMathavan).
 // Ball-cushion: see CushionModel in model.h and docs/billiards.md.
 #ifndef SPORTSIM_SIM_BILLIARDS_COLLISION_H_
 #define SPORTSIM_SIM_BILLIARDS_COLLISION_H_
@@ -36,9 +37,21 @@ inline constexpr double kMinApproachSpeed = 1e-9;
 /// can see (a ball at 1 mm/s rolls 5 um before it stops).
 inline constexpr double kRestingContactSpeed = 1e-3;
 
-/// Resolves a ball-ball contact. Does nothing (returns false) when the balls are not
-/// approaching along the line of centres faster than kMinApproachSpeed.
+/// Resolves a ball-ball contact by the table's BallBallModel. Does nothing (returns false) when
+/// the balls are not approaching along the line of centres faster than kMinApproachSpeed.
 bool CollideBalls(const TableModel& model, uint32_t effects, Ball* a, Ball* b);
+
+/// TP A-14's ball-ball friction mu = a + b exp(-c slip) at the contact's sliding speed `slip`.
+double BallFriction(const PhysicsParams& p, double slip);
+
+/// Mathavan, Jackson and Parkin's (2014) ball-ball impact (BallBallModel::kMathavan2014):
+/// integrated over the normal impulse, restitution `e` by the normal work, the contact's
+/// sliding friction `mu` against its slip as it evolves (held at zero once it closes), and the
+/// cloth's sliding friction `mu_table` at the ball the contact's friction presses into the
+/// cloth, against that ball's own slip there. `n` is the horizontal unit normal from a to b;
+/// the balls must be approaching along it. Changes v (horizontal after) and w of both.
+void CollideBallsMathavan(const TableModel& model, const Eigen::Vector3d& n, double e,
+                          double mu, double mu_table, Ball* a, Ball* b);
 
 /// Mathavan, Jackson and Parkin's (2010) cushion impact (CushionModel::kMathavan2010) with the
 /// coefficients given: restitution `e` at the nose, sliding friction `mu_cushion` at the nose

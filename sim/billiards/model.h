@@ -95,6 +95,20 @@ enum class CushionModel : uint8_t {
   kStrongeCompliant,
 };
 
+/// How two balls' impact is resolved.
+enum class BallBallModel : uint8_t {
+  /// One impulse: restitution e_ball along the line of centres and TP A-14's friction (mu_ball_a,
+  /// _b, _c_spm at the contact's sliding speed) capped where it stops the slip (CollideBalls).
+  kAlciatore,
+  /// Mathavan, Jackson and Parkin (2014): the impact integrated over the normal impulse, the
+  /// contact's friction (TP A-14's at the slip it starts with) against its slip as that
+  /// evolves, and the cloth's sliding friction (mu_slide) at the ball the contact's friction
+  /// presses into the cloth; restitution e_ball by the normal work. Where the contact's slip
+  /// is horizontal (no spin about the contact's horizontal tangent) nothing presses either
+  /// ball and it is kAlciatore (docs/billiards.md).
+  kMathavan2014,
+};
+
 /// Numeric model parameters, with the typical pool values as defaults. Every field can be set by
 /// name (see ParamInfos()).
 struct PhysicsParams {
@@ -137,6 +151,7 @@ struct PhysicsParams {
   double drag_coefficient = 0.5;       ///< C_d: F = -1/2 rho C_d pi R^2 |v| v (sphere, Re ~ 1e4)
   double spin_drag_coefficient = 0.01; ///< C_m: torque = -1/2 rho C_m R^5 |w| w (order of magnitude)
   CushionModel cushion_model = CushionModel::kHan;
+  BallBallModel ball_ball_model = BallBallModel::kAlciatore;
 };
 
 /// One named numeric parameter: what `--param NAME=VALUE` and GetInfo expose.

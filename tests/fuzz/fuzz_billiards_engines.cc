@@ -221,6 +221,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       s.params.cushion_restitution_exponent = exponent;
       m.push_back(*b::TableModel::Create(s));
     }
+    // Mathavan's integrated ball-ball impact, on pool cloth and on a cloth grippy enough (mu_s
+    // 1, ball friction up to 1.1) that a pressed ball's cloth slip could stick and chatters.
+    for (const auto& [p, mu_slide, mu_ball_b] : {std::tuple{"pool-9ft", 0.2, 0.108},
+                                                  {"snooker", 1.0, 1.0}}) {
+      b::TableSpec s = *b::MakeTablePreset(p);
+      s.params.ball_ball_model = b::BallBallModel::kMathavan2014;
+      s.params.mu_slide = mu_slide;
+      s.params.mu_ball_b = mu_ball_b;
+      m.push_back(*b::TableModel::Create(s));
+    }
     return m;
   }();
   FuzzedDataProvider in(data, size);

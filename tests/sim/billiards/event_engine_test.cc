@@ -786,6 +786,24 @@ TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
               static_cast<long long>(stats.most), stats.worst_overlap, stats.worst_pen);
 }
 
+// Mathavan's integrated ball-ball impact (2014) in the event engine: 300 random shots on the
+// pool, snooker and carom tables (breaks into packed racks among them) keep the invariants.
+TEST(EventEngineTest, MathavansBallImpactKeepsTheInvariants) {
+  std::mt19937_64 rng(13);
+  RandomShotStats stats;
+  for (std::string_view preset : {"pool-9ft", "snooker", "carom"}) {
+    TableSpec spec = *MakeTablePreset(preset);
+    spec.params.ball_ball_model = BallBallModel::kMathavan2014;
+    const TableModel m = *TableModel::Create(std::move(spec));
+    for (int i = 0; i < 100; ++i) {
+      PlayRandomShotChecked(m, preset, i, rng, &stats);
+      if (HasFatalFailure()) return;
+    }
+  }
+  EXPECT_GE(stats.shots, 290);
+  EXPECT_LE(stats.most, 3000);
+}
+
 // A restitution that falls steeply with speed (cushion_restitution_exponent 2 from 0.85: e is 0,
 // a plastic impact, above 2.6 m/s) on every cushion model: a fast ball's plastic impact at Han's
 // or Stronge's nose leaves it still moving into the rail (the impulse along the tilted normal
