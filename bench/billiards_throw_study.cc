@@ -19,12 +19,18 @@
 // gives it follow, a drawing one draw), which changes its speed along the line of centres while
 // it slides, and so the angle of its path.
 //
+// The same shots with Mathavan's integrated impact (BallBallModel::kMathavan2014): the
+// contact's friction following its slip, and the cloth's friction at the ball it presses down
+// (the object ball after follow, the cue ball after draw). Where the slip is horizontal (stun,
+// english) it is TP A-14's impulse; the columns say by how much it departs elsewhere.
+//
 // Squirt: TP A-31's cue-ball deflection, atan(5/2 a sqrt(1 - a^2) / (1 + m/m_e + 5/2 (1 -
 // a^2))), against the engine's cue strike on each preset, and the pivot length it implies
 // (where the cue must pivot for a back-hand english aim to cancel the squirt: a R / tan(squirt)).
 //
 // CSV on stdout, one section per line kind:
-//   throw,spin,speed_mps,cut_deg,engine_deg,reference_deg,rolled_deg
+//   throw,spin,speed_mps,cut_deg,engine_deg,reference_deg,rolled_deg,mathavan_deg,
+//     mathavan_rolled_deg
 //   squirt,preset,a,engine_deg,reference_deg,pivot_m
 // and a summary on stderr; exit status 3 where the engine departs from either analysis by more
 // than 1e-9 deg. Usage: billiards_throw_study
@@ -112,6 +118,9 @@ int main(int argc, char** /*argv*/) {
     return 2;
   }
   const TableModel pool = *TableModel::Create(*MakeTablePreset("pool-9ft"));
+  TableSpec integrated_spec = *MakeTablePreset("pool-9ft");
+  integrated_spec.params.ball_ball_model = BallBallModel::kMathavan2014;
+  const TableModel integrated = *TableModel::Create(integrated_spec);
   const PhysicsParams& p = pool.params();
   const double radius = pool.radius();
   struct Spin {
@@ -122,27 +131,39 @@ int main(int argc, char** /*argv*/) {
                         {"inside", 0.0, 0.625}, {"outside", 0.0, -0.625},
                         {"gearing", 0.0, NAN}};
   const double speeds[] = {0.447, 1.341, 3.129};
-  std::printf("throw,spin,speed_mps,cut_deg,engine_deg,reference_deg,rolled_deg\n");
+  std::printf(
+      "throw,spin,speed_mps,cut_deg,engine_deg,reference_deg,rolled_deg,mathavan_deg,"
+      "mathavan_rolled_deg\n");
   double worst = 0.0;
   for (const Spin& s : spins) {
+    double apart = 0.0, rolled_apart = 0.0;  // Mathavan's integration against TP A-14's
     for (double v : speeds) {
       double best = -INFINITY, best_cut = 0.0;
       for (int cut_deg = 0; cut_deg <= 85; cut_deg += 5) {
         const double cut = cut_deg / kDegPerRad;
         const double side = std::isnan(s.side) ? -v * std::sin(cut) : s.side * v;
         const Throw t = EngineThrow(pool, cut, v, s.follow * v / radius, side / radius);
+        const Throw m = EngineThrow(integrated, cut, v, s.follow * v / radius, side / radius);
+        apart = std::max(apart, std::abs(m.departure_deg - t.departure_deg));
+        if (!std::isnan(t.rolled_deg) && !std::isnan(m.rolled_deg)) {
+          rolled_apart = std::max(rolled_apart, std::abs(m.rolled_deg - t.rolled_deg));
+        }
         const double ref = ReferenceThrowDeg(p, cut, v, s.follow * v, side);
         worst = std::max(worst, std::abs(t.departure_deg - ref));
         if (t.departure_deg > best) {
           best = t.departure_deg;
           best_cut = cut_deg;
         }
-        std::printf("throw,%s,%.3f,%d,%.6f,%.6f,%.6f\n", s.name, v, cut_deg, t.departure_deg, ref,
-                    t.rolled_deg);
+        std::printf("throw,%s,%.3f,%d,%.6f,%.6f,%.6f,%.6f,%.6f\n", s.name, v, cut_deg,
+                    t.departure_deg, ref, t.rolled_deg, m.departure_deg, m.rolled_deg);
       }
       std::fprintf(stderr, "%-8s %.3f m/s: most throw %.2f deg at a %.0f deg cut\n", s.name, v,
                    best, best_cut);
     }
+    std::fprintf(stderr,
+                 "%-8s Mathavan 2014 against TP A-14: departures %.3g deg apart at most, rolled "
+                 "paths %.3g\n",
+                 s.name, apart, rolled_apart);
   }
   std::fprintf(stderr, "engine against TP A-14: largest difference %.2g deg\n", worst);
   bool departs = !(worst < 1e-9);

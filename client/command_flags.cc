@@ -70,6 +70,8 @@ const Flags& SetupFlags() {
       {"param_file", "model parameters from a JSON file: an object of NAME: VALUE, or a `table "
                      "calibrate --format json` report (its params); --param overrides it"},
       {"cushion_model", "han (default), mathavan2010, stronge or mirror"},
+      {"ball_ball_model", "alciatore (default: one impulse) or mathavan2014 (integrated, with "
+                          "the cloth's friction at the pressed ball)"},
       {"jitter", "seeded random gaps between racked balls, [0, 0.01] m (default 0)"},
       {"rack_seed", "seed of --jitter (default 0)"},
   };
@@ -260,7 +262,8 @@ std::vector<CommandSpec> MakeSpecs() {
        Join({{{"table", "table preset to start from (default pool-9ft)"},
               {"param", "a starting parameter (repeatable)"},
               {"param_file", "starting parameters from a JSON file (as table create's)"},
-              {"cushion_model", "han (default), mathavan2010, stronge or mirror"}},
+              {"cushion_model", "han (default), mathavan2010, stronge or mirror"},
+              {"ball_ball_model", "alciatore (default) or mathavan2014"}},
              SolverFlags(),
              {{"fit", "parameters to fit, NAME or NAME=LO:HI, comma separated (default bounds: "
                       "the published ranges; none: the strikes only)"},

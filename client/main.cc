@@ -92,7 +92,8 @@ Commands:
       [--b B] [--engine event|stepped] [--integrator euler|semi_implicit_euler|rk4] [--dt S]
       [--no-ccd] [--disable EFFECT,...] [--enable drag] [--param NAME=VALUE ...]
       (--integrator, --dt, --no-ccd: with --engine stepped only)
-      [--cushion-model han|mirror] [--noise X --seed N] [--jitter M --rack-seed N]
+      [--cushion-model han|mathavan2010|stronge|mirror] [--ball-ball-model alciatore|mathavan2014]
+      [--noise X --seed N] [--jitter M --rack-seed N]
       [--sample-rate HZ] [--max-time S] [--svg FILE]
   shot batch [setup and solver flags of shot simulate] [--samples N] [--noise X] [--seed N]
       [--outcome summary|final|events] [--max-time S] < strikes.jsonl   a batch of candidate
@@ -426,6 +427,7 @@ constexpr FieldFlag kFieldFlags[] = {
     {"table.balls", "--ball"},          {"table.preset", "--table"},
     {"table.rack_jitter_m", "--jitter"}, {"table.rack", "--rack"},
     {"table.params", "--param"},        {"table.cushion_model", "--cushion-model"},
+    {"table.ball_ball_model", "--ball-ball-model"},
     {"strike.ball_speed_mps", "--ball-speed"}, {"strike.speed_mps", "--speed"},
     {"strike.ball", "--strike-ball"},   {"strike.phi_deg", "--phi"},
     {"strike.theta_deg", "--theta"},    {"strike.a", "--a"},

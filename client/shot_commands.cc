@@ -47,6 +47,7 @@ ABSL_FLAG(std::string, engine, "", "Billiards engine: event|stepped (default: th
 ABSL_FLAG(bool, no_ccd, false, "Stepped engine without continuous collision detection");
 ABSL_FLAG(std::vector<std::string>, enable, {}, "Effects off by default to switch on: drag");
 ABSL_FLAG(std::string, cushion_model, "", "Cushion model: han|mathavan2010|stronge|mirror");
+ABSL_FLAG(std::string, ball_ball_model, "", "Ball-ball model: alciatore|mathavan2014");
 ABSL_FLAG(std::string, param_file, "",
           "Model parameters from a JSON file: an object of NAME: VALUE, or a `table calibrate "
           "--format json` report (its params); --param flags override it");
@@ -147,6 +148,12 @@ std::optional<std::string> BuildSetup(v1::TableSetup* t) {
   else if (cm == "stronge") t->set_cushion_model(v1::CUSHION_MODEL_STRONGE_COMPLIANT);
   else if (!cm.empty()) {
     return "--cushion-model must be han, mathavan2010, stronge or mirror, got '" + cm + "'";
+  }
+  const std::string bm = absl::GetFlag(FLAGS_ball_ball_model);
+  if (bm == "alciatore") t->set_ball_ball_model(v1::BALL_BALL_MODEL_ALCIATORE);
+  else if (bm == "mathavan2014") t->set_ball_ball_model(v1::BALL_BALL_MODEL_MATHAVAN_2014);
+  else if (!bm.empty()) {
+    return "--ball-ball-model must be alciatore or mathavan2014, got '" + bm + "'";
   }
   return std::nullopt;
 }

@@ -109,6 +109,18 @@ absl::StatusOr<TableBuild> TableFromProto(const v1::TableSetup& setup) {
       return absl::InvalidArgumentError(
           absl::StrFormat("table.cushion_model: unknown value %d", setup.cushion_model()));
   }
+  switch (setup.ball_ball_model()) {
+    case v1::BALL_BALL_MODEL_UNSPECIFIED:
+    case v1::BALL_BALL_MODEL_ALCIATORE:
+      spec->params.ball_ball_model = b::BallBallModel::kAlciatore;
+      break;
+    case v1::BALL_BALL_MODEL_MATHAVAN_2014:
+      spec->params.ball_ball_model = b::BallBallModel::kMathavan2014;
+      break;
+    default:
+      return absl::InvalidArgumentError(
+          absl::StrFormat("table.ball_ball_model: unknown value %d", setup.ball_ball_model()));
+  }
   // A new ball radius moves the cushion nose with it (where the preset ties the nose to the
   // ball) unless the caller set the height.
   if (params.count("ball_radius_m") && !params.count("cushion_height_m")) {

@@ -432,6 +432,29 @@ class CliAgainstServer(unittest.TestCase):
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("cushion_restitution_exponent", r.stderr)
 
+    def test_ball_ball_models(self):
+        # A ball rolling from the strike (b = 0.4: natural roll) 0.5 m into a ball at rest,
+        # square. TP A-14's single impulse sends the object ball off at (1 + e) v / 2;
+        # Mathavan 2014's integration presses it into the cloth (the cue ball's follow drags
+        # its contact point down), whose friction holds it back: (1 - ms mu) (1 + e) v /
+        # (2 - ms mu), v the arrival speed after rolling resistance, mu TP A-14's at the slip v.
+        g, mu_r, ms, e, radius = 9.81, 0.01, 0.2, 0.95, 0.028575
+        v = math.sqrt(1.5 * 1.5 - 2 * mu_r * g * (0.5 - 2 * radius))
+        mu = 0.00995 + 0.108 * math.exp(-1.088 * v)
+        shot = ("--format", "json", "shot", "simulate", "--table", "pool-9ft", "--rack",
+                "empty", "--ball", "cue@-0.25,0", "--ball", "1@0.25,0", "--ball-speed", "1.5",
+                "--b", "0.4")
+        for model, want in (("alciatore", (1 + e) * v / 2),
+                            ("mathavan2014", (1 - ms * mu) * (1 + e) * v / (2 - ms * mu))):
+            r = cli(self.server.address, *shot, "--ball-ball-model", model)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            hit = [ev for ev in json.loads(r.stdout)["events"] if ev["kind"] == "ball_ball"][0]
+            after = {a["id"]: a for a in hit["after"]}
+            self.assertAlmostEqual(after["1"]["vx_mps"], want, places=9)
+        r = cli(self.server.address, *shot, "--ball-ball-model", "sticky")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("alciatore or mathavan2014", r.stderr)
+
     def test_cushion_models(self):
         # A stun ball into the top rail, slightly off square (still sliding when it gets
         # there): every model rebounds it; the compliant cushion's tangential spring sends it

@@ -178,6 +178,21 @@ TEST(BilliardsConvertTest, BallRadiusKeepsTheCaromNose) {
   EXPECT_EQ(job->table.model.params().cushion_height_m, 0.037);
 }
 
+TEST(BilliardsConvertTest, BallBallModel) {
+  v1::SimulateShotRequest r = Strike2();
+  absl::StatusOr<ShotJob> job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().ball_ball_model, b::BallBallModel::kAlciatore);
+  r.mutable_table()->set_ball_ball_model(v1::BALL_BALL_MODEL_MATHAVAN_2014);
+  job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().ball_ball_model, b::BallBallModel::kMathavan2014);
+  r.mutable_table()->set_ball_ball_model(v1::BALL_BALL_MODEL_ALCIATORE);
+  job = ShotJobFromProto(r);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_EQ(job->table.model.params().ball_ball_model, b::BallBallModel::kAlciatore);
+}
+
 TEST(BilliardsConvertTest, CushionModelMirror) {
   v1::SimulateShotRequest r = Strike2();
   r.mutable_table()->set_cushion_model(v1::CUSHION_MODEL_MIRROR);
@@ -383,6 +398,13 @@ INSTANTIATE_TEST_SUITE_P(
                          setup, setup->GetDescriptor()->FindFieldByName("cushion_model"), 42);
                    },
                    "table.cushion_model: unknown value 42"},
+        BadRequest{"unknown_ball_ball_model",
+                   [](auto* r) {
+                     v1::TableSetup* setup = r->mutable_table();
+                     setup->GetReflection()->SetEnumValue(
+                         setup, setup->GetDescriptor()->FindFieldByName("ball_ball_model"), 7);
+                   },
+                   "table.ball_ball_model: unknown value 7"},
         BadRequest{"ball_nan", [](auto* r) { Place(r, "cue", kNan, 0.0); }, "table.balls[0]",
                    "must be finite"},
         BadRequest{"ball_inf", [](auto* r) { Place(r, "cue", 0.0, -kInf); }, "table.balls[0]",
