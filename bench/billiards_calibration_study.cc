@@ -50,8 +50,12 @@
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
 //          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
 //          [--cushion-on-read-cloth] [--strike-recovery] [--fade-recovery U]
+//          [--ball-ball-model alciatore|mathavan2014]
 //
 // --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
+// --ball-ball-model mathavan2014: every row with Mathavan's integrated ball-ball impact
+// (BallBallModel::kMathavan2014) instead of TP A-14's single impulse; the model column reads
+// e.g. han+mathavan2014.
 // --cushion-on-read-cloth: a fourth row per model, cushion_on_read_cloth: the cloth read from
 // the training shots' tracks (no model), the spin-down and cushion constants fitted on it.
 // --resample: every strike fit resamples its starts between windows (StrikeBounds::resample);
@@ -96,6 +100,8 @@ bool cushion_on_read_cloth = false;
 StrikeBounds strike_bounds;
 // The cushion models studied (--model, repeatable; default all three).
 std::vector<std::string> models;
+// --ball-ball-model: the ball-ball impact of every table studied.
+BallBallModel ball_ball_model = BallBallModel::kAlciatore;
 // --fade-recovery U: the synthetic recordings' table slides with slip-speed friction u_c = U.
 double reference_fade_mps = 0.0;
 
@@ -363,9 +369,13 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
                              : cm == CushionModel::kMathavan2010 ? "mathavan2010"
                                                                  : "stronge";
     if (!models.empty() && std::find(models.begin(), models.end(), name) == models.end()) continue;
+    const auto row_name = [&](const std::string& n) {
+      return ball_ball_model == BallBallModel::kMathavan2014 ? n + "+mathavan2014" : n;
+    };
     TableSpec spec = preset;
     spec.params.cushion_model = cm;
-    Score(source, name, "preset", spec, test, truth);
+    spec.params.ball_ball_model = ball_ball_model;
+    Score(source, row_name(name), "preset", spec, test, truth);
     // The rolling resistance alone: what one constant from the right cloth is worth.
     CalibrationOptions roll;
     roll.params.push_back({.name = "mu_roll"});
@@ -374,7 +384,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
     if (absl::StatusOr<CalibrationReport> r = Calibrate(spec, SolverOptions{}, train, roll); r.ok()) {
       TableSpec s = spec;
       s.params = r->params;
-      Score(source, name, "rolling_only", s, test, truth);
+      Score(source, row_name(name), "rolling_only", s, test, truth);
     }
     // The spin-down and the model's own cushion constants; calibrated: the cloth's with them.
     std::vector<FitParam> cushion = {{.name = "spin_decel_rps2"}};
@@ -414,7 +424,7 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
       }
       TableSpec s = spec;
       s.params = r->params;
-      Score(source, name, row, s, test, truth);
+      Score(source, row_name(name), row, s, test, truth);
     };
     std::vector<FitParam> all = {{.name = "mu_slide"}, {.name = "mu_roll"}};
     all.insert(all.end(), cushion.begin(), cushion.end());
@@ -586,6 +596,14 @@ int main(int argc, char** argv) {
         return 2;
       }
       models.push_back(m);
+    } else if (!std::strcmp(argv[i], "--ball-ball-model") && i + 1 < argc) {
+      const std::string m = argv[++i];
+      if (m != "alciatore" && m != "mathavan2014") {
+        std::fprintf(stderr, "--ball-ball-model: alciatore or mathavan2014\n");
+        return 2;
+      }
+      ball_ball_model =
+          m == "mathavan2014" ? BallBallModel::kMathavan2014 : BallBallModel::kAlciatore;
     } else if (!std::strcmp(argv[i], "--elevation") && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%lf:%lf", &elevation[0], &elevation[1]) != 2 ||
           !(elevation[0] >= 0.0 && elevation[1] >= elevation[0] && elevation[1] <= 30.0)) {
@@ -611,7 +629,8 @@ int main(int argc, char** argv) {
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
                    "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
-                   "[--strike-recovery] [--read-cloth] [--fade-recovery U]\n");
+                   "[--strike-recovery] [--read-cloth] [--fade-recovery U] "
+                   "[--ball-ball-model alciatore|mathavan2014]\n");
       return 2;
     }
   }

@@ -174,8 +174,6 @@ class PairImpact {
     return Rates(z, Eigen::Vector2d(-u[0] / (7.0 * kv_), -u[1] / (5.0 * kv_)), 0.0);
   }
 
-  double radius() const { return radius_; }
-
  private:
   double radius_, mu_, mu_table_, kv_, kw_, floor_;
 };
@@ -244,6 +242,9 @@ void CollideBallsMathavan(const TableModel& model, const Eigen::Vector3d& n, dou
       const double q = k1[10], r = PairImpact::Approach(k1), left = z[10] - target;
       ahead = 2.0 * left / (-q + std::sqrt(std::max(0.0, q * q - 2.0 * r * left)));
     }
+    // The cloth's friction can outdo the normal impulse where mu_slide mu nears 2 (far outside
+    // any cloth and ball's), and the approach then stops falling: no prediction there.
+    if (!(ahead > 0.0)) ahead = std::numeric_limits<double>::infinity();
     const bool phase_limited = !(h < ahead);
     double taken = std::min(h, ahead);
     if (!stuck) {
