@@ -2206,5 +2206,30 @@ TEST(MathavanBallBallTest, AgreesWithPooltoolsIntegration) {
   }
 }
 
+// The same closed form played whole on both engines and every integrator: a ball rolling 0.3 m
+// (from natural roll, slowed by rolling resistance only) square into a ball at rest, with
+// Mathavan's impact; the object ball leaves at (1 - ms mu)(1 + e) v / (2 - ms mu), v the
+// arrival speed.
+TEST_P(ClosedFormTest, MathavansImpactOnAStraightFollowShot) {
+  const TableModel model = MathavanPairModel();
+  const PhysicsParams& p = model.params();
+  const double radius = model.radius(), a = p.mu_roll * p.gravity_mps2;
+  const double v0 = 1.5, gap = 0.3;
+  const Eigen::Vector3d v(v0, 0.0, 0.0);
+  const TableState start{.balls = {
+      MakeBall(model, "cue", {-2.0 * radius - gap, 0.0}, v, RollingSpin(v, radius)),
+      MakeBall(model, "obj", {0.0, 0.0})}};
+  const double v_hit = std::sqrt(v0 * v0 - 2.0 * a * gap), t_hit = (v0 - v_hit) / a;
+  const double mu = BallFriction(p, v_hit), ms = p.mu_slide, e = p.e_ball;
+  const double v_tol = kVelTolMps + a * PosTol({{a, t_hit}}) / v_hit;
+  std::vector<Event> events;
+  AdvanceTo(model, Options(), start, t_hit + 0.01, &events);
+  const Event* hit = FindBallBall(events, 0, 1);
+  ASSERT_NE(hit, nullptr);
+  EXPECT_NEAR(hit->vb.x(), (1.0 - ms * mu) * (1.0 + e) * v_hit / (2.0 - ms * mu), v_tol);
+  EXPECT_NEAR(hit->va.x(), v_hit - (1.0 + e) * v_hit / (2.0 - ms * mu), v_tol);
+  EXPECT_EQ(hit->vb.y(), 0.0);
+}
+
 }  // namespace
 }  // namespace sportsim::billiards
