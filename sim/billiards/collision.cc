@@ -263,17 +263,26 @@ void CollideBallsMathavan(const TableModel& model, const Eigen::Vector3d& n, dou
       rejected = true;
       continue;
     }
+    // A step past the phase's end (the rates changed on the way, so the prediction fell
+    // short) is taken again to where the phase's quantity, linear over the step, crosses it.
+    const double end_tol = 1e-13 * speed * (compressing ? 1.0 : total);
+    const double end_from = compressing ? PairImpact::Approach(z) : z[10] - target;
+    const double end_to = compressing ? PairImpact::Approach(next) : next[10] - target;
+    if (!fallback && end_to < -end_tol && taken > h_min) {
+      h = std::max(h_min, taken * end_from / (end_from - end_to));
+      continue;
+    }
     z = next;
     k1 = k_next;
     if (!stuck && (overshot || rates.BallSlip(z).norm() <= landing)) {
       land();
       k1 = rates(z, stuck);
     }
-    if (compressing && PairImpact::Approach(z) <= 1e-13 * speed) {
+    if (compressing && PairImpact::Approach(z) <= end_tol) {
       compressing = false;
       target = (1.0 - e * e) * z[10];
       if (e == 0.0) break;
-    } else if (!compressing && z[10] - target <= 1e-13 * speed * total) {
+    } else if (!compressing && z[10] - target <= end_tol) {
       break;
     }
     if (!phase_limited) h = std::min(total, taken * ode::Dp45StepFactor(err / tol, rejected));

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <random>
@@ -765,6 +766,22 @@ void PlayRandomShotChecked(const TableModel& m, std::string_view preset, int i,
   stats->most = std::max(stats->most, sim->events_processed());
 }
 
+// `per_preset` random shots, each checked as above, on each preset's table with `tweak` applied
+// to its parameters.
+void PlayRandomShotsOn(std::initializer_list<std::string_view> presets,
+                       const std::function<void(PhysicsParams*)>& tweak, int per_preset,
+                       std::mt19937_64& rng, RandomShotStats* stats) {
+  for (std::string_view preset : presets) {
+    TableSpec spec = *MakeTablePreset(preset);
+    tweak(&spec.params);
+    const TableModel m = *TableModel::Create(std::move(spec));
+    for (int i = 0; i < per_preset; ++i) {
+      PlayRandomShotChecked(m, preset, i, rng, stats);
+      if (::testing::Test::HasFatalFailure()) return;
+    }
+  }
+}
+
 // 10,000 seeded random shots across the six presets, each checked as above; no event cap, and
 // no shot over 3,000 events handled (the storm bound; measured 816, and 14,342 with the hops).
 TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
@@ -791,15 +808,11 @@ TEST(EventEngineTest, InvariantsOverTenThousandRandomShots) {
 TEST(EventEngineTest, MathavansBallImpactKeepsTheInvariants) {
   std::mt19937_64 rng(13);
   RandomShotStats stats;
-  for (std::string_view preset : {"pool-9ft", "snooker", "carom"}) {
-    TableSpec spec = *MakeTablePreset(preset);
-    spec.params.ball_ball_model = BallBallModel::kMathavan2014;
-    const TableModel m = *TableModel::Create(std::move(spec));
-    for (int i = 0; i < 100; ++i) {
-      PlayRandomShotChecked(m, preset, i, rng, &stats);
-      if (HasFatalFailure()) return;
-    }
-  }
+  PlayRandomShotsOn(
+      {"pool-9ft", "snooker", "carom"},
+      [](PhysicsParams* p) { p->ball_ball_model = BallBallModel::kMathavan2014; }, 100, rng,
+      &stats);
+  if (HasFatalFailure()) return;
   EXPECT_GE(stats.shots, 290);
   EXPECT_LE(stats.most, 3000);
 }
@@ -814,17 +827,15 @@ TEST(EventEngineTest, PlasticFastImpactsKeepTheInvariants) {
                           CushionModel::kMathavan2010}) {
     std::mt19937_64 rng(11);
     RandomShotStats stats;
-    for (std::string_view preset : {"pool-9ft", "carom"}) {
-      TableSpec spec = *MakeTablePreset(preset);
-      spec.params.cushion_model = cm;
-      spec.params.e_cushion = spec.params.e_cushion_mathavan = 0.85;
-      spec.params.cushion_restitution_exponent = 2.0;
-      const TableModel m = *TableModel::Create(std::move(spec));
-      for (int i = 0; i < 50; ++i) {
-        PlayRandomShotChecked(m, preset, i, rng, &stats);
-        if (HasFatalFailure()) return;
-      }
-    }
+    PlayRandomShotsOn(
+        {"pool-9ft", "carom"},
+        [cm](PhysicsParams* p) {
+          p->cushion_model = cm;
+          p->e_cushion = p->e_cushion_mathavan = 0.85;
+          p->cushion_restitution_exponent = 2.0;
+        },
+        50, rng, &stats);
+    if (HasFatalFailure()) return;
     EXPECT_GE(stats.shots, 95);
     EXPECT_LE(stats.most, 3000);
   }
