@@ -27,6 +27,16 @@
 //  - --aimed: the synthetic strikes aimed so that the cue ball meets the first object ball
 //    first, as in most three-cushion shots (the same layouts, speeds and spins otherwise);
 //    source synthetic-aimed.
+//  - --scoring: only synthetic shots whose struck ball scores the three-cushion point under the
+//    reference table (random shots, aimed, drawn until one does), as most of a match's shots
+//    are meant to; source ends in -scoring.
+//  - --predict central: every strike fitted on a shot's start is the one whose rest is central
+//    among the strikes that fit the start about as well as the best (StrikeBounds::
+//    central_rest; the default, best-fit, takes the best fit); sources end in -central.
+//  - --intent three-cushion: every strike fitted on a shot's start takes the three-cushion
+//    player's intent as its prior (StrikeBounds::intent, games::ThreeCushionIntent: of the
+//    strikes that fit the start about as well as the best, only those that score the point);
+//    sources end in -intent.
 //  - --elevation LO:HI: the synthetic cues raised LO to HI degrees (a raised cue's side spin
 //    curves the path from the start); --fit-elevation fits the cue's elevation with every
 //    strike (else level). Raised shots' source ends in -raised.
@@ -50,7 +60,8 @@
 //          [--write-set FILE] [--false-detections F] [--huber M] [--aimed]
 //          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
 //          [--cushion-on-read-cloth] [--strike-recovery] [--fade-recovery U]
-//          [--ball-ball-model alciatore|mathavan2014]
+//          [--ball-ball-model alciatore|mathavan2014] [--scoring] [--predict best-fit|central]
+//          [--intent three-cushion] [--predict-recovery]
 //
 // --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
 // --ball-ball-model mathavan2014: every row with Mathavan's integrated ball-ball impact
@@ -63,6 +74,9 @@
 // --fade-recovery U: instead, whether a calibration reads slip-speed friction (u_c = U) back
 // from the synthetic shots' tracks, with U = 0 the control (FadeRecovery; --shots, --huber and
 // --fit-elevation apply).
+// --predict-recovery: instead, what the central rest and the intent gain a prediction from a
+// shot's first 0.4 s under the reference table itself or --preset's (PredictRecovery;
+// --shots, --aimed, --scoring, --huber and --fit-elevation apply).
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
 // strikes, each start alone and resampled, under the reference table itself or --preset's
 // (StrikeRecovery; --shots, --aimed, --huber and --fit-elevation apply).
@@ -85,6 +99,7 @@
 #include "sim/billiards/shot.h"
 #include "sim/billiards/track_file.h"
 #include "sim/core/cpu_clock.h"
+#include "sim/games/three_cushion.h"
 
 namespace sportsim::billiards {
 namespace {
@@ -104,6 +119,8 @@ std::vector<std::string> models;
 BallBallModel ball_ball_model = BallBallModel::kAlciatore;
 // --fade-recovery U: the synthetic recordings' table slides with slip-speed friction u_c = U.
 double reference_fade_mps = 0.0;
+// --scoring: the synthetic shots are drawn until each scores the three-cushion point.
+bool scoring_only = false;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -173,6 +190,12 @@ std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections =
     }
     // A tracker's clock: started 0.1 to 0.5 s before the strike, whose time is not known.
     const double strike_time = 0.1 + 0.4 * u(clock_rng);
+    if (scoring_only) {
+      TableState struck = s;
+      if (!ApplyStrike(truth, 0, c, 0, &struck).ok()) continue;
+      absl::StatusOr<ShotResult> shot = SimulateShot(truth, SolverOptions{}, struck, ShotOptions{});
+      if (!shot.ok() || !games::ThreeCushionIntent()(s, 0, shot->events)) continue;
+    }
     absl::StatusOr<Recording> r = SyntheticRecording(
         truth, SolverOptions{}, s, 0, c,
         SyntheticOptions{.rate_hz = 50,
@@ -326,7 +349,7 @@ void Score(const std::string& source, const std::string& model_name, const std::
            const std::vector<Recording>& truth) {
   const TableModel m = *TableModel::Create(spec);
   std::vector<double> fit, final_err, cpu;
-  int fit_rails = 0, predict_rails = 0, n = 0;
+  int fit_rails = 0, predict_rails = 0, n = 0, intent_met = 0;
   for (size_t i = 0; i < test.size(); ++i) {
     const Recording& rec = test[i];
     const Recording& clean = truth[i];
@@ -338,6 +361,7 @@ void Score(const std::string& source, const std::string& model_name, const std::
         ScoreShot(m, SolverOptions{}, clean, whole->strike, 1e300, whole->strike_time_s);
     if (!scored.ok()) continue;
     ++n;
+    intent_met += early->intent_met;
     fit.push_back(scored->mean_m);
     const Outcome best = Play(m, rec, whole->strike);
     const Outcome predicted = Play(m, rec, early->strike);
@@ -348,6 +372,10 @@ void Score(const std::string& source, const std::string& model_name, const std::
     cpu.push_back(best.cpu_s);
   }
   const auto share = [n](int k) { return n > 0 ? static_cast<double>(k) / n : 0.0; };
+  if (strike_bounds.intent) {
+    std::fprintf(stderr, "%s %s %s: %d of %d predictions meet the intent\n", source.c_str(),
+                 model_name.c_str(), constants.c_str(), intent_met, n);
+  }
   std::printf("%s,%s,%s,%.1f,%.2f,%.0f,%.2f,%.0f,%d\n", source.c_str(), model_name.c_str(),
               constants.c_str(), 1e3 * Median(fit), share(fit_rails), 1e3 * Median(final_err),
               share(predict_rails), 1e6 * Median(cpu), n);
@@ -426,9 +454,9 @@ void Study(const std::string& source, const TableSpec& preset, const std::vector
       s.params = r->params;
       Score(source, row_name(name), row, s, test, truth);
     };
-    std::vector<FitParam> all = {{.name = "mu_slide"}, {.name = "mu_roll"}};
-    all.insert(all.end(), cushion.begin(), cushion.end());
-    calibrate("calibrated", false, std::move(all));
+    std::vector<FitParam> every = {{.name = "mu_slide"}, {.name = "mu_roll"}};
+    every.insert(every.end(), cushion.begin(), cushion.end());
+    calibrate("calibrated", false, std::move(every));
     if (cushion_on_read_cloth) calibrate("cushion_on_read_cloth", true, cushion);
   }
 }
@@ -468,6 +496,69 @@ void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
   }
   std::fprintf(stderr, "strike recovery: fits more than 5 %% above the true strike's error: %d of %d "
                "each start alone, %d resampled\n", misses, scored, resampled_misses);
+}
+
+// What a prediction from a shot's first 0.4 s gains from weighing its plausible strikes
+// (StrikeBounds::central_rest) and from the three-cushion player's intent (intent), at best:
+// the synthetic recordings fitted under the reference table itself (no model error), or with
+// --preset P under that preset's table, on their first 0.4 s: the best fit, the central rest,
+// and the central rest of the strikes that score. Per shot and way: where the struck ball ends
+// against where it was last tracked (mm) and whether the fitted shot scores the point; the
+// simulations of each. On stderr the medians.
+void PredictRecovery(int n, bool aimed, const TableSpec& spec) {
+  const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed);
+  const TableModel m = *TableModel::Create(spec);
+  const ShotIntent point = games::ThreeCushionIntent();
+  std::array<StrikeBounds, 3> ways = {strike_bounds, strike_bounds, strike_bounds};
+  ways[0].central_rest = false;
+  ways[0].intent = nullptr;
+  ways[1].central_rest = true;
+  ways[1].intent = nullptr;
+  ways[2].central_rest = true;
+  ways[2].intent = point;
+  std::printf("shot,best_fit_mm,central_mm,intent_mm,best_fit_scores,central_scores,intent_scores,"
+              "best_fit_simulations,central_simulations,intent_simulations\n");
+  std::array<std::vector<double>, 3> err;
+  std::array<int, 3> scores = {0, 0, 0};
+  for (size_t i = 0; i < recs.size(); ++i) {
+    std::array<double, 3> e{};
+    std::array<int, 3> scored{};
+    std::array<long long, 3> sims{};
+    bool ok = true;
+    for (size_t w = 0; w < ways.size() && ok; ++w) {
+      absl::StatusOr<StrikeFit> fit = FitStrike(m, SolverOptions{}, recs[i], ways[w], kPredictWindow, huber_m);
+      if (!fit.ok()) {
+        std::fprintf(stderr, "%s: %s\n", recs[i].name.c_str(), fit.status().ToString().c_str());
+        ok = false;
+        break;
+      }
+      TableState s = recs[i].initial;
+      if (!ApplyStrike(m, 0, fit->strike, recs[i].cue, &s).ok()) {
+        ok = false;
+        break;
+      }
+      absl::StatusOr<ShotResult> r = SimulateShot(m, SolverOptions{}, s, ShotOptions{});
+      if (!r.ok()) {
+        ok = false;
+        break;
+      }
+      e[w] = (r->final_state.balls[static_cast<size_t>(recs[i].cue)].r.head<2>() - LastTracked(recs[i])).norm();
+      scored[w] = point(recs[i].initial, recs[i].cue, r->events) ? 1 : 0;
+      sims[w] = fit->simulations;
+    }
+    if (!ok) continue;
+    for (size_t w = 0; w < ways.size(); ++w) {
+      err[w].push_back(e[w]);
+      scores[w] += scored[w];
+    }
+    std::printf("%zu,%.0f,%.0f,%.0f,%d,%d,%d,%lld,%lld,%lld\n", i, 1e3 * e[0], 1e3 * e[1], 1e3 * e[2],
+                scored[0], scored[1], scored[2], sims[0], sims[1], sims[2]);
+    std::fflush(stdout);
+  }
+  std::fprintf(stderr, "predict recovery: median final position %.0f mm (best fit), %.0f mm "
+               "(central rest), %.0f mm (central rest, the point intended); the point scored in "
+               "%d, %d and %d of %zu\n", 1e3 * Median(err[0]), 1e3 * Median(err[1]),
+               1e3 * Median(err[2]), scores[0], scores[1], scores[2], err[0].size());
 }
 
 // Slip-speed friction read back from tracks: n synthetic recordings made with u_c = `fade` (the
@@ -548,12 +639,14 @@ int main(int argc, char** argv) {
   bool synthetic = true;
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
-  bool aimed = false, strike_recovery = false, preset_given = false, read_cloth = false;
+  bool aimed = false, strike_recovery = false, predict_recovery = false, preset_given = false, read_cloth = false;
   double fade_recovery = -1.0;
   std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--strike-recovery")) {
       strike_recovery = true;
+    } else if (!std::strcmp(argv[i], "--predict-recovery")) {
+      predict_recovery = true;
     } else if (!std::strcmp(argv[i], "--fade-recovery") && i + 1 < argc) {
       fade_recovery = std::atof(argv[++i]);
       if (!(fade_recovery >= 0.0 && fade_recovery <= 1.0)) {
@@ -581,6 +674,21 @@ int main(int argc, char** argv) {
       write_set = argv[++i];
     } else if (!std::strcmp(argv[i], "--recorded-shots") && i + 1 < argc) {
       recorded_shots = std::max(2, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--predict") && i + 1 < argc) {
+      const std::string w = argv[++i];
+      if (w != "best-fit" && w != "central") {
+        std::fprintf(stderr, "--predict: best-fit or central\n");
+        return 2;
+      }
+      strike_bounds.central_rest = w == "central";
+    } else if (!std::strcmp(argv[i], "--scoring")) {
+      scoring_only = true;
+    } else if (!std::strcmp(argv[i], "--intent") && i + 1 < argc) {
+      if (std::strcmp(argv[++i], "three-cushion") != 0) {
+        std::fprintf(stderr, "--intent: three-cushion\n");
+        return 2;
+      }
+      strike_bounds.intent = sportsim::games::ThreeCushionIntent();
     } else if (!std::strcmp(argv[i], "--aimed")) {
       aimed = true;
     } else if (!std::strcmp(argv[i], "--fit-elevation")) {
@@ -629,8 +737,9 @@ int main(int argc, char** argv) {
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
                    "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
-                   "[--strike-recovery] [--read-cloth] [--fade-recovery U] "
-                   "[--ball-ball-model alciatore|mathavan2014]\n");
+                   "[--strike-recovery] [--predict-recovery] [--read-cloth] [--fade-recovery U] "
+                   "[--ball-ball-model alciatore|mathavan2014] [--scoring] "
+                   "[--predict best-fit|central] [--intent three-cushion]\n");
       return 2;
     }
   }
@@ -638,13 +747,17 @@ int main(int argc, char** argv) {
     FadeRecovery(shots, fade_recovery);
     return 0;
   }
-  if (strike_recovery) {
+  if (strike_recovery || predict_recovery) {
     absl::StatusOr<TableSpec> spec = MakeTablePreset(preset);
     if (preset_given && !spec.ok()) {
       std::fprintf(stderr, "--preset: %s\n", std::string(spec.status().message()).c_str());
       return 2;
     }
-    StrikeRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
+    if (strike_recovery) {
+      StrikeRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
+    } else {
+      PredictRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
+    }
     return 0;
   }
   // The recorded shots at --recordings, on --preset's table, in the tracker's frame; exits
@@ -693,8 +806,11 @@ int main(int argc, char** argv) {
   }
   if (synthetic) {
     const std::string source = std::string("synthetic") + (aimed ? "-aimed" : "") +
+                               (scoring_only ? "-scoring" : "") +
                                (elevation[1] > 0.0 ? "-raised" : "") +
-                               (strike_bounds.resample ? "-resample" : "");
+                               (strike_bounds.resample ? "-resample" : "") +
+                               (strike_bounds.central_rest ? "-central" : "") +
+                               (strike_bounds.intent ? "-intent" : "");
     if (false_detections > 0.0) {
       Study(source, *MakeTablePreset("carom"),
             Synthetic(shots, 33, false_detections, aimed, elevation),
@@ -704,7 +820,10 @@ int main(int argc, char** argv) {
     }
   }
   if (!recorded.empty()) {
-    Study(strike_bounds.resample ? "recorded-resample" : "recorded", recorded_spec, recorded);
+    Study(std::string("recorded") + (strike_bounds.resample ? "-resample" : "") +
+              (strike_bounds.central_rest ? "-central" : "") +
+              (strike_bounds.intent ? "-intent" : ""),
+          recorded_spec, recorded);
   }
   return 0;
 }

@@ -15,6 +15,7 @@
 #include "Eigen/QR"
 #include "absl/strings/str_cat.h"
 #include "absl/strings/str_format.h"
+#include "sim/billiards/shot.h"
 #include "unsupported/Eigen/LevenbergMarquardt"
 
 namespace sportsim::billiards {
@@ -501,6 +502,8 @@ struct StrikeResiduals {
   ShotPoints pts;
   const VectorXd* prior;
   Budget* budget;
+  // The prior's weight on the side offset's coordinate and on the height's.
+  std::array<double, 2> prior_weight = {kTipPrior, kTipPrior};
 
   int size() const { return 2 * pts.n + (prior != nullptr ? 2 : 0); }
   absl::Status operator()(const VectorXd& x, double* r) const {
@@ -508,8 +511,8 @@ struct StrikeResiduals {
       return s;
     }
     if (prior != nullptr) {
-      r[2 * pts.n] = kTipPrior * (x[2] - (*prior)[2]);
-      r[2 * pts.n + 1] = kTipPrior * (x[3] - (*prior)[3]);
+      r[2 * pts.n] = prior_weight[0] * (x[2] - (*prior)[2]);
+      r[2 * pts.n + 1] = prior_weight[1] * (x[3] - (*prior)[3]);
     }
     return absl::OkStatus();
   }
@@ -529,9 +532,11 @@ struct StrikeResiduals {
 
 absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, const Recording& rec,
                           const StrikeMap& map, double window, double huber_m, const VectorXd* prior,
-                          int iterations, Budget* budget, VectorXd* u) {
+                          int iterations, Budget* budget, VectorXd* u,
+                          std::array<double, 2> prior_weight = {kTipPrior, kTipPrior}) {
   const int k = map.size();
-  const StrikeResiduals residuals{model, solver, rec, map, PointsOf(rec, window, huber_m), prior, budget};
+  const StrikeResiduals residuals{model, solver, rec,    map, PointsOf(rec, window, huber_m),
+                                  prior, budget, prior_weight};
   if (2 * residuals.pts.n < k) return absl::OkStatus();  // too early to say anything: keep the start
   LmFunctor f(k, residuals.size());
   f.residuals = [&](const VectorXd& x, VectorXd* r) { return residuals(x, r->data()); };
@@ -638,6 +643,143 @@ absl::Status Resample(const TableModel& model, const SolverOptions& solver, cons
   return absl::OkStatus();
 }
 
+// A strike's whole shot, simulated to rest: whether it meets an intent (StrikeBounds::intent)
+// and where the struck ball rests. A strike the engine refuses meets none and rests nowhere.
+struct PlayedOut {
+  bool met = false;
+  bool rested = false;
+  Eigen::Vector2d rest = Eigen::Vector2d::Zero();
+};
+absl::StatusOr<PlayedOut> PlayOut(const TableModel& model, const SolverOptions& solver,
+                                  const Recording& rec, const CueStrike& strike,
+                                  const ShotIntent& intent, Budget* budget) {
+  if (absl::Status s = budget->Take(); !s.ok()) return s;
+  PlayedOut out;
+  TableState state = rec.initial;
+  if (!ApplyStrike(model, solver.effects, strike, rec.cue, &state).ok()) return out;
+  absl::StatusOr<ShotResult> shot = SimulateShot(model, solver, state, ShotOptions{});
+  if (!shot.ok()) return out;
+  out.met = intent && intent(rec.initial, rec.cue, shot->events);
+  out.rested = true;
+  out.rest = shot->final_state.balls[static_cast<size_t>(rec.cue)].r.head<2>();
+  return out;
+}
+
+// The strikes a prediction tries (StrikeBounds::central_rest, intent): tip offsets on a grid, as fractions of the miscue
+// limit: side offsets every kPlausibleSideStep within kPlausibleReach of the centre, each pinned
+// there (kPlausiblePin, StrikeResiduals' prior weight: a thousandth of a unit of the offset's
+// coordinate weighs as 10 um of mean error), and heights every kPlausibleHeightStep as starts,
+// pulled toward as the fit's early windows are (kTipPrior: where the window sees the height,
+// they all come to it; where the slide outlasts it, they stay spread). The rest of each strike
+// (speed, heading, elevation) is fitted to the window for up to kPlausibleIterations. Each row
+// of the grid is walked out from its middle both ways, each strike starting from its
+// neighbour's fit: the heading that trades against the side offset moves smoothly along it.
+constexpr double kPlausibleSideStep = 0.05;
+constexpr double kPlausibleHeightStep = 0.15;
+constexpr double kPlausibleReach = 0.7;
+constexpr double kPlausiblePin = 10.0;
+constexpr int kPlausibleIterations = 10;
+
+// One of the strikes a prediction weighs.
+struct Plausible {
+  TimedStrike timed;
+  double loss = 0.0;
+  ShotError error;
+  PlayedOut out;
+};
+
+// A prediction from a shot's start (StrikeBounds::central_rest, intent), after the best fit
+// `best` over the window (its loss `best_cost`, its strike's time held). The plausible strikes
+// are the grid's whose loss over the window is within kPlausibleChi2 of the best's, and the
+// best itself; each is played to rest. Under an intent, those that meet it are weighed (all
+// of them where none does). Each weighs as its likelihood against the best's, exp(-chi2 / 2).
+// With central_rest the strike taken is their weighted medoid in where the struck ball rests:
+// the one whose rest is nearest the others' on the weighted average, the choice among them
+// that minimises the expected distance from the true rest, were the weights the posterior;
+// else the one with the least loss.
+absl::Status WeighPlausible(const TableModel& model, const SolverOptions& solver,
+                           const Recording& rec, const StrikeBounds& bounds, const StrikeMap& map,
+                           double window, const ShotPoints& all, double huber_m, Budget* budget,
+                           double best_cost, StrikeFit* best) {
+  const StrikeMap held = map.HeldAt(best->strike_time_s);
+  const int k = held.size();
+  const double variance = best_cost / std::max(1, 2 * all.n - k);
+  const double limit = best_cost + kPlausibleChi2 * variance;
+  std::vector<Plausible> plausible;
+  {
+    Plausible p{{best->strike, best->strike_time_s}, best_cost, best->error, {}};
+    absl::StatusOr<PlayedOut> out = PlayOut(model, solver, rec, p.timed.strike, bounds.intent, budget);
+    if (!out.ok()) return out.status();
+    p.out = *out;
+    plausible.push_back(std::move(p));
+  }
+  VectorXd base(k);
+  held.FromTimed({best->strike, best->strike_time_s}, base.data());
+  const double l = model.params().miscue_limit;
+  const int sides = static_cast<int>(std::lround(kPlausibleReach / kPlausibleSideStep));
+  const int heights = static_cast<int>(std::floor(kPlausibleReach / kPlausibleHeightStep));
+  for (int j = -heights; j <= heights; ++j) {
+    const double b = j * kPlausibleHeightStep;
+    for (const int dir : {1, -1}) {
+      VectorXd u = base;
+      for (int i = dir > 0 ? 0 : -1; std::abs(i) <= sides; i += dir) {
+        const double a = i * kPlausibleSideStep;
+        if (std::hypot(a, b) > kPlausibleReach + 1e-9) continue;
+        CueStrike tip = held.ToTimed(u.data()).strike;
+        tip.a = a * l;
+        tip.b = b * l;
+        held.FromTimed({tip, best->strike_time_s}, u.data());
+        const VectorXd pin = u;
+        if (absl::Status s = RefineStrike(model, solver, rec, held, window, huber_m, &pin,
+                                          kPlausibleIterations, budget, &u, {kPlausiblePin, kTipPrior});
+            !s.ok()) {
+          return s;
+        }
+        TimedStrike timed = held.ToTimed(u.data());
+        timed.strike.phi_rad = std::remainder(timed.strike.phi_rad, 2.0 * std::numbers::pi);
+        absl::StatusOr<Scored> scored = ScoreOn(model, solver, rec, timed, all, budget);
+        if (!scored.ok()) return scored.status();
+        if (!(scored->loss <= limit)) continue;
+        absl::StatusOr<PlayedOut> out = PlayOut(model, solver, rec, timed.strike, bounds.intent, budget);
+        if (!out.ok()) return out.status();
+        if (!out->rested) continue;
+        plausible.push_back({timed, scored->loss, scored->error, *out});
+      }
+    }
+  }
+  const bool any_met = std::any_of(plausible.begin(), plausible.end(),
+                                   [](const Plausible& p) { return p.out.met; });
+  std::vector<const Plausible*> pool;
+  for (const Plausible& p : plausible) {
+    if (p.out.rested && (p.out.met || !any_met)) pool.push_back(&p);
+  }
+  if (pool.empty()) return absl::OkStatus();  // the best fit's strike rests nowhere: it stands
+  const auto chi2 = [&](const Plausible& p) {
+    return variance > 0.0 ? std::max(0.0, (p.loss - best_cost) / variance) : 0.0;
+  };
+  const Plausible* chosen = nullptr;
+  double least = std::numeric_limits<double>::infinity();
+  for (const Plausible* p : pool) {  // in the grid's order: ties go to the earlier
+    double sum = p->loss;
+    if (bounds.central_rest) {
+      sum = 0.0;
+      for (const Plausible* q : pool) {
+        sum += std::exp(-0.5 * chi2(*q)) * (p->out.rest - q->out.rest).norm();
+      }
+    }
+    if (sum < least) {
+      least = sum;
+      chosen = p;
+    }
+  }
+  best->strike = chosen->timed.strike;
+  best->error = chosen->error;
+  best->plausible = static_cast<int>(plausible.size());
+  best->intent_met = chosen->out.met;
+  best->window_chi2 = chi2(*chosen);
+  return absl::OkStatus();
+}
+
 // FitStrike's work, on a budget. With free_time an unknown strike time is, at the end,
 // refined with the rest of the best start's strike over the whole window (the best fit under
 // this table); without, it stays where the first motion put it (for the calibration's passes,
@@ -646,7 +788,8 @@ absl::Status Resample(const TableModel& model, const SolverOptions& solver, cons
 absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptions& solver,
                                       const Recording& rec, const StrikeBounds& bounds,
                                       double until_s, double huber_m, Budget* budget,
-                                      bool free_time, double* loss = nullptr) {
+                                      bool free_time, bool predict,
+                                      double* loss = nullptr) {
   StrikeFit best;
   const int64_t used0 = budget->used();
   const StrikeClock clock = ClockOf(model, rec);
@@ -735,6 +878,15 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
     }
     // LM keeps the best point it saw: never worse but for rounding.
     if (absl::Status s = keep(polish.ToTimed(u.data())); !s.ok()) return s;
+  }
+  // A prediction from the shot's start: the plausible strikes weighed.
+  if (predict && (bounds.intent || bounds.central_rest) &&
+      clock.t0 + until_s < rec.track.back().t_s) {
+    if (absl::Status s = WeighPlausible(model, solver, rec, bounds, map, clock.t0 + until_s, all,
+                                       huber_m, budget, best_cost, &best);
+        !s.ok()) {
+      return s;
+    }
   }
   if (loss != nullptr) *loss = best_cost;
   best.simulations = budget->used() - used0;
@@ -843,7 +995,8 @@ absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions
   if (absl::Status s = CheckOptions(bounds); !s.ok()) return s;
   if (absl::Status s = CheckHuber(huber_m); !s.ok()) return s;
   Budget budget(std::numeric_limits<int64_t>::max(), nullptr);
-  return FitStrikeOn(model, solver, rec, bounds, until_s, huber_m, &budget, /*free_time=*/true);
+  return FitStrikeOn(model, solver, rec, bounds, until_s, huber_m, &budget, /*free_time=*/true,
+                     /*predict=*/true);
 }
 
 std::optional<std::pair<double, double>> CalibrationRange(std::string_view name) {
@@ -1099,7 +1252,7 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
     } else {
       absl::StatusOr<StrikeFit> fit =
           FitStrikeOn(*model0, solver, rec, options.strike_bounds, window, options.huber_m, &budget,
-                      /*free_time=*/!joint || sr.heldout);
+                      /*free_time=*/!joint || sr.heldout, /*predict=*/sr.heldout);
       if (!fit.ok()) {
         return absl::Status(fit.status().code(),
                             absl::StrFormat("recordings[%d]: %s", i, fit.status().message()));
@@ -1257,7 +1410,7 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
                             double* loss) -> absl::StatusOr<TimedStrike> {
       absl::StatusOr<StrikeFit> fit =
           FitStrikeOn(m, solver, recordings[static_cast<size_t>(i)], options.strike_bounds, window_s,
-                      options.huber_m, &budget, /*free_time=*/false, loss);
+                      options.huber_m, &budget, /*free_time=*/false, /*predict=*/false, loss);
       if (!fit.ok()) return fit.status();
       return TimedStrike{fit->strike, fit->strike_time_s};
     };
@@ -1507,9 +1660,11 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
     if (sr.heldout && !rec.strike) {
       absl::StatusOr<StrikeFit> fit =
           FitStrikeOn(*model1, solver, rec, options.strike_bounds, options.strike_window_s,
-                      options.huber_m, &budget, /*free_time=*/true);
+                      options.huber_m, &budget, /*free_time=*/true, /*predict=*/true);
       if (!fit.ok()) return fit.status();
       strikes[static_cast<size_t>(i)] = {fit->strike, fit->strike_time_s};
+      sr.plausible = fit->plausible;
+      sr.intent_met = fit->intent_met;
     }
     sr.strike_after = strikes[static_cast<size_t>(i)].strike;
     sr.strike_after.phi_rad = std::remainder(sr.strike_after.phi_rad, 2.0 * std::numbers::pi);

@@ -108,6 +108,19 @@ absl::StatusOr<ShotError> ScoreShot(const TableModel& model, const SolverOptions
                                     double until_s = 1e300,
                                     std::optional<double> strike_time_s = std::nullopt);
 
+/// What the player meant a shot to do, as a prior for a fit that sees only the shot's start
+/// (StrikeBounds::intent): whether a simulated shot did it, given the table before the strike,
+/// the struck ball and the engine's events in time order. A three-cushion point, say
+/// (games::ThreeCushionIntent).
+using ShotIntent =
+    std::function<bool(const TableState& before, int cue, std::span<const Event> events)>;
+
+/// A prediction (StrikeBounds::central_rest, intent) weighs the strikes whose loss over the
+/// window is within this many times the residuals' variance of the best fit's (a chi-square
+/// difference; each weighs as its likelihood against the best's, exp(-chi2 / 2), so that
+/// those near the bound count for a hundredth of the best).
+inline constexpr double kPlausibleChi2 = 9.0;
+
 /// What a shot's fitted strike may be: the cue ball's speed just after the strike (ball_speed),
 /// its heading, the tip offsets (each within +-0.7 of the miscue limit, so that both together
 /// stay inside it) and, when fit_elevation, the cue's elevation (else level); and how it is
@@ -122,6 +135,23 @@ struct StrikeBounds {
   /// (every real table) no better on the whole shot and worse at predicting it from its
   /// start, so off by default.
   bool resample = false;
+  /// Predicting a shot from its start: how a fit over a window that ends before the track
+  /// does picks its strike. The window leaves the strike undetermined (before its first
+  /// cushion or ball a level cue's side spin hardly shows, the height only once the slide
+  /// ends), and a hair's difference there is a metre at the end of a three-cushion path. So
+  /// the fit weighs the plausible strikes (a grid of tip offsets, the rest of each strike
+  /// fitted to the window; those within kPlausibleChi2 of the best fit, each as its
+  /// likelihood), played to rest (docs/billiards.md, "Predicting a shot from its start"):
+  ///  - central_rest: the strike taken is the one whose rest is the plausible strikes'
+  ///    weighted medoid (the least expected distance from where the ball will rest), not the
+  ///    best fit's;
+  ///  - intent: what the shot was meant to do (empty: nothing assumed), a prior: only the
+  ///    plausible strikes that meet it are weighed, where any does; with central_rest off, the
+  ///    best of them is taken.
+  /// Neither is consulted over a whole track (the data decide) or in a calibration's
+  /// training fits; a calibration's held-out shots take them.
+  bool central_rest = false;
+  ShotIntent intent;
 };
 
 /// Fits a shot's strike (and its time, where the recording's is unknown) to its tracked
@@ -134,6 +164,12 @@ struct StrikeFit {
   double strike_time_s = 0.0;  ///< on the track's clock (the recording's when known)
   ShotError error;        ///< over the points fitted
   int64_t simulations = 0;
+  /// A prediction's (StrikeBounds::central_rest, intent): the plausible strikes weighed (0:
+  /// none, the best fit taken), whether the strike taken meets the intent, and its loss over
+  /// the window above the best fit's, in the residuals' variances.
+  int plausible = 0;
+  bool intent_met = false;
+  double window_chi2 = 0.0;
 };
 /// huber_m > 0 fits under Huber's loss with that scale (m; see the top of this file), 0 under
 /// squared distances.
@@ -196,6 +232,10 @@ struct ShotReport {
   CueStrike strike_before, strike_after;
   double strike_time_before_s = 0.0, strike_time_after_s = 0.0;  ///< on the track's clock
   ShotError before, after;
+  /// A held-out shot predicted from its window under the fitted parameters
+  /// (StrikeBounds::central_rest, intent): StrikeFit's plausible and intent_met.
+  int plausible = 0;
+  bool intent_met = false;
 };
 
 struct ParamReport {

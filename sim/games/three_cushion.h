@@ -32,6 +32,7 @@
 
 #include <string_view>
 
+#include "sim/billiards/calibrate.h"
 #include "sim/games/game.h"
 
 namespace sportsim::games {
@@ -42,6 +43,11 @@ std::string_view ThreeCushionBall(int seat);
 /// The UMB point: ball `own` touched `obj_a` and `obj_b`, with at least three cushion hits of
 /// its own before its first contact with the second of them.
 bool ThreeCushionPoint(const ShotFacts& facts, int own, int obj_a, int obj_b);
+
+/// The three-cushion player's intent, a prior for fitting a recorded shot's strike from its
+/// start (billiards::StrikeBounds::intent): on a table of three balls, the struck ball scores
+/// the UMB point on the other two. Never met on another table.
+billiards::ShotIntent ThreeCushionIntent();
 
 }  // namespace sportsim::games
 
