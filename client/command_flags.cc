@@ -275,6 +275,10 @@ std::vector<CommandSpec> MakeSpecs() {
               {"cue_ball", "the struck ball in every file (default: the first to depart from "
                            "its spot)"},
               {"fit_elevation", "fit the cue's elevation too (default level)"},
+              {"predict", "held-out shots fitted on a --window: best-fit (default) or central "
+                          "(the plausible strikes' central rest)"},
+              {"intent", "what the held-out shots were meant to do, a prior for --window "
+                         "predictions: none (default) or three-cushion (the UMB point)"},
               {"read_cloth", "read the cloth (mu_roll, mu_slide) from the training shots' "
                              "tracks and start from it"},
               {"huber", "Huber's scale in metres, [0, 1]: false detections pull the fit as "

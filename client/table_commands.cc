@@ -86,6 +86,12 @@ ABSL_FLAG(std::string, cue_ball, "",
           "table calibrate: the struck ball in every file (default: the first ball to depart "
           "from its spot)");
 ABSL_FLAG(bool, fit_elevation, false, "table calibrate: fit the cue's elevation too");
+ABSL_FLAG(std::string, predict, "best-fit",
+          "table calibrate: held-out shots fitted on a --window: best-fit (the strike that fits "
+          "it best) or central (the plausible strikes' central rest)");
+ABSL_FLAG(std::string, intent, "none",
+          "table calibrate: what the held-out shots were meant to do, a prior for predictions "
+          "from a --window: none or three-cushion (the UMB point)");
 ABSL_FLAG(bool, read_cloth, false,
           "table calibrate: read the cloth (rolling resistance, sliding friction) from the "
           "training shots' tracks and start from it");
@@ -765,6 +771,18 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   if (const auto n = absl::GetFlag(FLAGS_max_iterations)) request.set_max_iterations(*n);
   if (const auto n = absl::GetFlag(FLAGS_max_simulations)) request.set_max_simulations(*n);
   request.set_fit_elevation(absl::GetFlag(FLAGS_fit_elevation));
+  if (const std::string w = absl::GetFlag(FLAGS_predict); w == "central") {
+    request.set_prediction(v1::STRIKE_PREDICTION_CENTRAL_REST);
+  } else if (w == "best-fit") {
+    request.set_prediction(v1::STRIKE_PREDICTION_BEST_FIT);
+  } else {
+    return UsageError("--predict: best-fit or central, got '" + w + "'");
+  }
+  if (const std::string i = absl::GetFlag(FLAGS_intent); i == "three-cushion") {
+    request.set_intent(v1::SHOT_INTENT_THREE_CUSHION_POINT);
+  } else if (i != "none") {
+    return UsageError("--intent: none or three-cushion, got '" + i + "'");
+  }
   request.set_read_cloth(absl::GetFlag(FLAGS_read_cloth));
   if (const auto h = absl::GetFlag(FLAGS_huber)) request.set_huber_m(*h);
   const std::string cue = absl::GetFlag(FLAGS_cue_ball);
@@ -889,9 +907,13 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
     std::cout << absl::StrFormat("%-22s %9s %9s %9s  %s\n", "shot", "before", "after", "strike s",
                                  "(mean distance, mm; strike time on the file's clock)");
     for (const v1::ShotCalibration& c : rep.shots()) {
+      std::string note = c.heldout() ? "held out" : "";
+      if (c.plausible() > 0) {
+        absl::StrAppend(&note, absl::StrFormat(", predicted from %d plausible strikes", c.plausible()));
+        if (c.intent_met()) absl::StrAppend(&note, ", as intended");
+      }
       std::cout << absl::StrFormat("%-22s %9.1f %9.1f %9.4f  %s\n", c.name(), 1e3 * c.before().mean_m(),
-                                   1e3 * c.after().mean_m(), c.strike_time_after_s(),
-                                   c.heldout() ? "held out" : "");
+                                   1e3 * c.after().mean_m(), c.strike_time_after_s(), note);
     }
     std::cout << absl::StrFormat("median: training %.1f -> %.1f mm", 1e3 * rep.train_before_m(),
                                  1e3 * rep.train_after_m());

@@ -10,6 +10,7 @@
 #include "absl/strings/str_format.h"
 #include "server/billiards/convert.h"
 #include "server/world/world.h"
+#include "sim/games/three_cushion.h"
 #include "sim/core/units.h"
 
 namespace sportsim::server {
@@ -215,6 +216,36 @@ absl::StatusOr<CalibrationJob> CalibrationJobFromProto(const v1::CalibrateTableR
     o.max_simulations = request.max_simulations();
   }
   o.strike_bounds.fit_elevation = request.fit_elevation();
+  switch (request.prediction()) {
+    case v1::STRIKE_PREDICTION_UNSPECIFIED:
+    case v1::STRIKE_PREDICTION_BEST_FIT:
+      break;
+    case v1::STRIKE_PREDICTION_CENTRAL_REST:
+      o.strike_bounds.central_rest = true;
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "prediction: %d is not a StrikePrediction (BEST_FIT, CENTRAL_REST)", request.prediction()));
+  }
+  switch (request.intent()) {
+    case v1::SHOT_INTENT_UNSPECIFIED:
+    case v1::SHOT_INTENT_NONE:
+      break;
+    case v1::SHOT_INTENT_THREE_CUSHION_POINT:
+      for (size_t i = 0; i < job.recordings.size(); ++i) {
+        const size_t balls = job.recordings[i].initial.balls.size();
+        if (balls != 3) {
+          return absl::InvalidArgumentError(absl::StrFormat(
+              "intent: THREE_CUSHION_POINT needs three balls on the table; shots[%d] has %d", i,
+              balls));
+        }
+      }
+      o.strike_bounds.intent = games::ThreeCushionIntent();
+      break;
+    default:
+      return absl::InvalidArgumentError(absl::StrFormat(
+          "intent: %d is not a ShotIntent (NONE, THREE_CUSHION_POINT)", request.intent()));
+  }
   o.huber_m = request.huber_m();  // checked with the rest below
   o.read_cloth = request.read_cloth();
   // The options against the table and shots: parameter names and bounds.
@@ -254,6 +285,8 @@ void CalibrationReportToProto(const CalibrationJob& job, const b::CalibrationRep
     ErrorToProto(s.after, c->mutable_after());
     c->set_strike_time_before_s(s.strike_time_before_s);
     c->set_strike_time_after_s(s.strike_time_after_s);
+    c->set_plausible(static_cast<uint32_t>(s.plausible));
+    c->set_intent_met(s.intent_met);
   }
   out->set_train_before_m(report.train_before_m);
   out->set_train_after_m(report.train_after_m);

@@ -1669,6 +1669,29 @@ class CalibrateAgainstServer(unittest.TestCase):
             self.assertIn(key, report)
         self.assertIn("calibrate: 100%", r.stderr)  # progress on stderr
 
+    def test_held_out_shots_predicted_from_their_start(self):
+        # The second shot held out and fitted on its first 0.4 s, its strike the plausible
+        # strikes' central rest among those that score the three-cushion point: the report
+        # says how many were weighed, the text too; bad choices are usage errors.
+        r = cli(self.server.address, "--format", "json", "--timeout", "300s", "table",
+                "calibrate", *self.files, "--table", "carom", "--heldout", "1", "--window", "0.4",
+                "--predict", "central", "--intent", "three-cushion")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        report = json.loads(r.stdout)
+        self.assertEqual(report["shots"][0]["plausible"], 0)  # a training shot: none weighed
+        self.assertGreater(report["shots"][1]["plausible"], 1)
+        self.assertIsInstance(report["shots"][1]["intent_met"], bool)
+        r = cli(self.server.address, "--timeout", "300s", "table", "calibrate", *self.files,
+                "--table", "carom", "--heldout", "1", "--window", "0.4", "--predict", "central")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"b\.csv .*held out, predicted from \d+ plausible strikes")
+        for flag, value, needle in (("--predict", "median", "--predict: best-fit or central"),
+                                    ("--intent", "pool", "--intent: none or three-cushion")):
+            r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
+                    flag, value)
+            self.assertEqual(r.returncode, 64, r.stderr)
+            self.assertIn(needle, r.stderr)
+
     def test_json_lines_track_files_calibrate_as_their_csv(self):
         # A recording's first 0.3 s as CSV and as JSON lines (as a tracker logging a detection
         # a line writes them): the strikes fitted and the report are the same, bit for bit.

@@ -26,6 +26,9 @@
 #include "server/billiards/calibration.h"
 #include "server/billiards/convert.h"
 #include "sim/billiards/calibrate.h"
+#include "sim/billiards/cue.h"
+#include "sim/billiards/shot.h"
+#include "sim/games/three_cushion.h"
 #include "sportsim/v1/billiards.grpc.pb.h"
 #include "sportsim/v1/common.grpc.pb.h"
 
@@ -298,6 +301,81 @@ TEST_F(CalibrationTest, BadRequestsAreInvalidArgumentNamingTheField) {
   req = good;
   req.set_huber_m(-0.01);
   EXPECT_THAT(refused(req), HasSubstr("huber_m must be in [0, 1] m"));
+  req = good;
+  req.set_prediction(static_cast<v1::StrikePrediction>(7));
+  EXPECT_THAT(refused(req), HasSubstr("prediction: 7 is not a StrikePrediction"));
+  req = good;
+  req.set_intent(static_cast<v1::ShotIntent>(9));
+  EXPECT_THAT(refused(req), HasSubstr("intent: 9 is not a ShotIntent"));
+  // The three-cushion point on a table of two balls: the red and its points taken away.
+  req = good;
+  req.set_intent(v1::SHOT_INTENT_THREE_CUSHION_POINT);
+  v1::RecordedShot* two = req.mutable_shots(1);
+  two->mutable_balls()->RemoveLast();
+  v1::RecordedShot kept = *two;
+  kept.clear_points();
+  for (const v1::TrackedPoint& p : two->points()) {
+    if (p.ball() < 2) *kept.add_points() = p;
+  }
+  *two = kept;
+  EXPECT_THAT(refused(req), HasSubstr("intent: THREE_CUSHION_POINT needs three balls on the table; "
+                                      "shots[1] has 2"));
+}
+
+// A held-out shot fitted on its first 0.4 s only, its strike taken as the plausible strikes'
+// central rest among those that score the three-cushion point: the report says how many were
+// weighed and whether the strike taken scores, the training shot's fit weighs none, and the
+// report is the offline calibration's, bit for bit. Without a prediction asked, none is
+// weighed.
+TEST_F(CalibrationTest, HeldOutShotsPredictedFromTheirStartWeighThePlausibleStrikes) {
+  Start();
+  v1::CalibrateTableRequest req = Request();
+  req.clear_fit();  // the strikes only
+  req.add_heldout(1);
+  req.set_strike_window_s(0.4);
+  req.set_prediction(v1::STRIKE_PREDICTION_CENTRAL_REST);
+  req.set_intent(v1::SHOT_INTENT_THREE_CUSHION_POINT);
+  std::vector<v1::CalibrateTableResponse> msgs;
+  grpc::Status st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  const v1::CalibrationReport& rep = msgs.back().report();
+  ASSERT_EQ(rep.shots_size(), 2);
+  EXPECT_EQ(rep.shots(0).plausible(), 0u);
+  EXPECT_GT(rep.shots(1).plausible(), 1u);
+
+  absl::StatusOr<CalibrationJob> job = CalibrationJobFromProto(req);
+  ASSERT_TRUE(job.ok()) << job.status();
+  EXPECT_TRUE(job->options.strike_bounds.central_rest);
+  absl::StatusOr<billiards::CalibrationReport> offline =
+      billiards::Calibrate(job->spec, job->solver, job->recordings, job->options);
+  ASSERT_TRUE(offline.ok()) << offline.status();
+  EXPECT_EQ(offline->shots[1].plausible, static_cast<int>(rep.shots(1).plausible()));
+  EXPECT_EQ(offline->shots[1].intent_met, rep.shots(1).intent_met());
+  EXPECT_EQ(offline->shots[1].strike_after.speed_mps, rep.shots(1).strike_after().ball_speed_mps());
+  EXPECT_EQ(offline->shots[1].strike_after.a, rep.shots(1).strike_after().a());
+  EXPECT_EQ(offline->shots[1].strike_after.b, rep.shots(1).strike_after().b());
+  EXPECT_EQ(offline->shots[1].after.mean_m, rep.shots(1).after().mean_m());
+  // Whether the strike taken scores is the referee's word on its shot.
+  billiards::TableState table = job->recordings[1].initial;
+  const billiards::TableModel model = *billiards::TableModel::Create(job->spec);
+  ASSERT_TRUE(billiards::ApplyStrike(model, 0, offline->shots[1].strike_after, job->recordings[1].cue,
+                                     &table).ok());
+  absl::StatusOr<billiards::ShotResult> played =
+      billiards::SimulateShot(model, job->solver, table, billiards::ShotOptions{});
+  ASSERT_TRUE(played.ok()) << played.status();
+  EXPECT_EQ(games::ThreeCushionIntent()(job->recordings[1].initial, job->recordings[1].cue,
+                                        played->events),
+            rep.shots(1).intent_met());
+
+  req.clear_prediction();
+  req.clear_intent();
+  msgs.clear();
+  st = Calibrate(req, &msgs);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  ASSERT_TRUE(msgs.back().has_report());
+  EXPECT_EQ(msgs.back().report().shots(1).plausible(), 0u);
+  EXPECT_FALSE(msgs.back().report().shots(1).intent_met());
 }
 
 // A tracker's false detections: every 17th point of each shot a metre off. Under Huber's loss
