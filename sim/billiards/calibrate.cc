@@ -535,7 +535,7 @@ absl::Status RefineStrike(const TableModel& model, const SolverOptions& solver, 
                           int iterations, Budget* budget, VectorXd* u,
                           std::array<double, 2> prior_weight = {kTipPrior, kTipPrior}) {
   const int k = map.size();
-  const StrikeResiduals residuals{model, solver, rec,    map, PointsOf(rec, window, huber_m),
+  const StrikeResiduals residuals{model, solver, rec, map, PointsOf(rec, window, huber_m),
                                   prior, budget, prior_weight};
   if (2 * residuals.pts.n < k) return absl::OkStatus();  // too early to say anything: keep the start
   LmFunctor f(k, residuals.size());
@@ -665,15 +665,17 @@ absl::StatusOr<PlayedOut> PlayOut(const TableModel& model, const SolverOptions& 
   return out;
 }
 
-// The strikes a prediction tries (StrikeBounds::central_rest, intent): tip offsets on a grid, as fractions of the miscue
-// limit: side offsets every kPlausibleSideStep within kPlausibleReach of the centre, each pinned
-// there (kPlausiblePin, StrikeResiduals' prior weight: a thousandth of a unit of the offset's
-// coordinate weighs as 10 um of mean error), and heights every kPlausibleHeightStep as starts,
-// pulled toward as the fit's early windows are (kTipPrior: where the window sees the height,
-// they all come to it; where the slide outlasts it, they stay spread). The rest of each strike
-// (speed, heading, elevation) is fitted to the window for up to kPlausibleIterations. Each row
-// of the grid is walked out from its middle both ways, each strike starting from its
-// neighbour's fit: the heading that trades against the side offset moves smoothly along it.
+// The strikes a prediction tries (StrikeBounds::central_rest, intent): tip offsets on a grid,
+// as fractions of the miscue limit. Side offsets every kPlausibleSideStep within
+// kPlausibleReach of the centre, each pinned there (kPlausiblePin, StrikeResiduals' prior
+// weight: a thousandth of a unit of the offset's coordinate weighs as a centimetre of root
+// mean square distance, ten thousand times kTipPrior's pull);
+// heights every kPlausibleHeightStep as starts, pulled toward as the fit's early windows are
+// (kTipPrior: where the window sees the height, they all come to it; where the slide outlasts
+// it, they stay spread). The rest of each strike (speed, heading, elevation) is fitted to the
+// window for up to kPlausibleIterations. Each row of the grid is walked out from its middle
+// both ways, each strike starting from its neighbour's fit: the heading that trades against
+// the side offset moves smoothly along it.
 constexpr double kPlausibleSideStep = 0.05;
 constexpr double kPlausibleHeightStep = 0.15;
 constexpr double kPlausibleReach = 0.7;
@@ -753,7 +755,7 @@ absl::Status WeighPlausible(const TableModel& model, const SolverOptions& solver
   for (const Plausible& p : plausible) {
     if (p.out.rested && (p.out.met || !any_met)) pool.push_back(&p);
   }
-  if (pool.empty()) return absl::OkStatus();  // the best fit's strike rests nowhere: it stands
+  if (pool.empty()) return absl::OkStatus();  // no plausible strike rests: the best fit stands
   const auto chi2 = [&](const Plausible& p) {
     return variance > 0.0 ? std::max(0.0, (p.loss - best_cost) / variance) : 0.0;
   };
