@@ -76,7 +76,7 @@
 // --fit-elevation apply).
 // --predict-recovery: instead, what the central rest and the intent gain a prediction from a
 // shot's first 0.4 s under the reference table itself or --preset's (PredictRecovery;
-// --shots, --aimed, --scoring, --huber and --fit-elevation apply).
+// --shots, --aimed, --scoring, --elevation, --huber and --fit-elevation apply).
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
 // strikes, each start alone and resampled, under the reference table itself or --preset's
 // (StrikeRecovery; --shots, --aimed, --huber and --fit-elevation apply).
@@ -505,8 +505,8 @@ void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
 // and the central rest of the strikes that score. Per shot and way: where the struck ball ends
 // against where it was last tracked (mm) and whether the fitted shot scores the point; the
 // simulations of each. On stderr the medians.
-void PredictRecovery(int n, bool aimed, const TableSpec& spec) {
-  const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed);
+void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const TableSpec& spec) {
+  const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed, elevation);
   const TableModel m = *TableModel::Create(spec);
   const ShotIntent point = games::ThreeCushionIntent();
   std::array<StrikeBounds, 3> ways = {strike_bounds, strike_bounds, strike_bounds};
@@ -756,7 +756,7 @@ int main(int argc, char** argv) {
     if (strike_recovery) {
       StrikeRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
     } else {
-      PredictRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
+      PredictRecovery(shots, aimed, elevation, preset_given ? *spec : ReferenceTable());
     }
     return 0;
   }
