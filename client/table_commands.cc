@@ -909,7 +909,8 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
     for (const v1::ShotCalibration& c : rep.shots()) {
       std::string note = c.heldout() ? "held out" : "";
       if (c.plausible() > 0) {
-        absl::StrAppend(&note, absl::StrFormat(", predicted from %d plausible strikes", c.plausible()));
+        absl::StrAppend(&note,
+                        absl::StrFormat(", predicted from %d plausible strikes", c.plausible()));
         if (c.intent_met()) absl::StrAppend(&note, ", as intended");
       }
       std::cout << absl::StrFormat("%-22s %9.1f %9.1f %9.4f  %s\n", c.name(), 1e3 * c.before().mean_m(),

@@ -10,8 +10,8 @@
 #include "absl/strings/str_format.h"
 #include "server/billiards/convert.h"
 #include "server/world/world.h"
-#include "sim/games/three_cushion.h"
 #include "sim/core/units.h"
+#include "sim/games/three_cushion.h"
 
 namespace sportsim::server {
 namespace {
