@@ -283,18 +283,15 @@ void BM_BallImpact(benchmark::State& state) {
 }
 BENCHMARK(BM_BallImpact)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kNanosecond);
 
-// The cloth read from tracks (ReadCloth, what CalibrationOptions::read_cloth does before a
-// calibration): eight random three-ball carom shots at 2-4 m/s, tracked with 1 mm noise at
-// range(0) Hz (50: a match tracker; 250: a fast camera, five times the points and finer roll
-// starts to try). Items: tracked points, so the rate is per point.
-void BM_ReadCloth(benchmark::State& state) {
-  const TableModel model = *TableModel::Create(*MakeTablePreset("carom"));
+// n random three-ball carom shots at 2-4 m/s, aimed within 0.2 rad of the first object ball,
+// tracked with 1 mm noise at rate_hz (seeded: the same shots every run).
+absl::StatusOr<std::vector<Recording>> TrackedCaromShots(const TableModel& model, double rate_hz,
+                                                          int n) {
   const double l = model.spec().length_m, w = model.spec().width_m;
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::vector<Recording> recs;
-  size_t points = 0;
-  for (int i = 0; i < 8; ++i) {
+  for (int i = 0; i < n; ++i) {
     TableState s;
     for (const char* id : {"white", "yellow", "red"}) {
       Ball b;
@@ -314,23 +311,68 @@ void BM_ReadCloth(benchmark::State& state) {
     strike.b = 0.3 * u(rng);
     absl::StatusOr<Recording> r = SyntheticRecording(
         model, SolverOptions{}, s, 0, strike,
-        SyntheticOptions{.rate_hz = static_cast<double>(state.range(0)), .noise_m = 1e-3,
-                         .seed = static_cast<uint64_t>(i + 1)});
-    if (!r.ok()) {
-      state.SkipWithError(std::string(r.status().message()).c_str());
-      return;
-    }
-    points += r->track.size();
+        SyntheticOptions{.rate_hz = rate_hz, .noise_m = 1e-3, .seed = static_cast<uint64_t>(i + 1)});
+    if (!r.ok()) return r.status();
     recs.push_back(*std::move(r));
   }
-  state.SetLabel(absl::StrFormat("%d Hz, %d shots, %d points", state.range(0), recs.size(), points));
+  return recs;
+}
+
+// The cloth read from tracks (ReadCloth, what CalibrationOptions::read_cloth does before a
+// calibration): eight random three-ball carom shots (TrackedCaromShots), tracked at range(0)
+// Hz (50: a match tracker; 250: a fast camera, five times the points and finer roll starts to
+// try). Items: tracked points, so the rate is per point.
+void BM_ReadCloth(benchmark::State& state) {
+  const TableModel model = *TableModel::Create(*MakeTablePreset("carom"));
+  absl::StatusOr<std::vector<Recording>> recs =
+      TrackedCaromShots(model, static_cast<double>(state.range(0)), 8);
+  if (!recs.ok()) {
+    state.SkipWithError(std::string(recs.status().message()).c_str());
+    return;
+  }
+  size_t points = 0;
+  for (const Recording& r : *recs) points += r.track.size();
+  state.SetLabel(absl::StrFormat("%d Hz, %d shots, %d points", state.range(0), recs->size(), points));
   for (auto _ : state) {
-    const ClothReading c = ReadCloth(recs, model.spec().params.gravity_mps2);
+    const ClothReading c = ReadCloth(*recs, model.spec().params.gravity_mps2);
     benchmark::DoNotOptimize(c);
   }
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(points));
 }
 BENCHMARK(BM_ReadCloth)->Arg(50)->Arg(250)->Unit(benchmark::kMillisecond);
+
+// A prediction from a shot's first 0.4 s (FitStrike on a window): range(0) 0, the best fit of
+// the window; 1, the plausible strikes' central rest (StrikeBounds::central_rest: a grid of
+// strikes fitted and played to rest). Four shots of TrackedCaromShots at 50 Hz under their
+// own table; items: shots, so the time per item is a prediction's. The label gives the
+// simulations a shot.
+void BM_PredictFromStart(benchmark::State& state) {
+  const TableModel model = *TableModel::Create(*MakeTablePreset("carom"));
+  absl::StatusOr<std::vector<Recording>> recs = TrackedCaromShots(model, 50.0, 4);
+  if (!recs.ok()) {
+    state.SkipWithError(std::string(recs.status().message()).c_str());
+    return;
+  }
+  const StrikeBounds bounds{.central_rest = state.range(0) == 1};
+  int64_t simulations = 0, fits = 0;
+  for (auto _ : state) {
+    for (const Recording& r : *recs) {
+      absl::StatusOr<StrikeFit> fit = FitStrike(model, SolverOptions{}, r, bounds, 0.4);
+      if (!fit.ok()) {
+        state.SkipWithError(std::string(fit.status().message()).c_str());
+        return;
+      }
+      simulations += fit->simulations;
+      ++fits;
+      benchmark::DoNotOptimize(fit->strike);
+    }
+  }
+  state.SetLabel(absl::StrFormat("%s, %d simulations a shot",
+                                 state.range(0) == 1 ? "central rest" : "best fit",
+                                 fits > 0 ? simulations / fits : 0));
+  state.SetItemsProcessed(fits);
+}
+BENCHMARK(BM_PredictFromStart)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sportsim::billiards
