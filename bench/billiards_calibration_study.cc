@@ -310,10 +310,13 @@ std::vector<Rail> FirstThree(std::vector<Rail> rails) {
   return rails;
 }
 
-// The rails met by the struck ball, in order (the first three), and where it rests.
+// The rails met by the struck ball, in order (the first three), where it rests, and whether
+// it scores the three-cushion point; played: whether the engine played the strike at all.
 struct Outcome {
   std::vector<Rail> rails;
   Eigen::Vector2d rest = Eigen::Vector2d::Zero();
+  bool point = false;
+  bool played = false;
   double cpu_s = 0.0;
 };
 Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike) {
@@ -326,6 +329,8 @@ Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike)
   if (!r.ok()) return o;
   o.rails = FirstThree(SimulatedRails(m.spec(), r->events, rec.cue));
   o.rest = r->final_state.balls[static_cast<size_t>(rec.cue)].r.head<2>();
+  o.point = games::ThreeCushionIntent()(rec.initial, rec.cue, r->events);
+  o.played = true;
   return o;
 }
 
@@ -532,18 +537,13 @@ void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const T
         ok = false;
         break;
       }
-      TableState s = recs[i].initial;
-      if (!ApplyStrike(m, 0, fit->strike, recs[i].cue, &s).ok()) {
+      const Outcome o = Play(m, recs[i], fit->strike);
+      if (!o.played) {
         ok = false;
         break;
       }
-      absl::StatusOr<ShotResult> r = SimulateShot(m, SolverOptions{}, s, ShotOptions{});
-      if (!r.ok()) {
-        ok = false;
-        break;
-      }
-      e[w] = (r->final_state.balls[static_cast<size_t>(recs[i].cue)].r.head<2>() - LastTracked(recs[i])).norm();
-      scored[w] = point(recs[i].initial, recs[i].cue, r->events) ? 1 : 0;
+      e[w] = (o.rest - LastTracked(recs[i])).norm();
+      scored[w] = o.point ? 1 : 0;
       sims[w] = fit->simulations;
     }
     if (!ok) continue;
