@@ -715,6 +715,13 @@ absl::Status WeighPlausible(const TableModel& model, const SolverOptions& solver
     p.out = *out;
     plausible.push_back(std::move(p));
   }
+  // The intent alone, met by the best fit: the prior agrees with the data, and the best fit
+  // stands with nothing more to weigh.
+  if (!bounds.central_rest && plausible.front().out.met) {
+    best->plausible = 1;
+    best->intent_met = true;
+    return absl::OkStatus();
+  }
   VectorXd base(k);
   held.FromTimed({best->strike, best->strike_time_s}, base.data());
   const double l = model.params().miscue_limit;
@@ -782,16 +789,17 @@ absl::Status WeighPlausible(const TableModel& model, const SolverOptions& solver
   return absl::OkStatus();
 }
 
-// FitStrike's work, on a budget. With free_time an unknown strike time is, at the end,
-// refined with the rest of the best start's strike over the whole window (the best fit under
-// this table); without, it stays where the first motion put it (for the calibration's passes,
-// in which it must not take up the table's errors). `loss`, when given, is set to the fit's
-// loss over the window (Simulate's residuals' sum of squares).
+// FitStrike's work, on a budget. A final fit (FitStrike's; a calibration's reports) refines
+// an unknown strike time, at the end, with the rest of the best start's strike over the whole
+// window (the best fit under this table), and over a window that ends before the track weighs
+// the plausible strikes where the bounds ask (a prediction: WeighPlausible). A calibration's
+// passes are not final: the time stays where the first motion put it (it must not take up the
+// table's errors), and their growing windows are no predictions. `loss`, when given, is set to
+// the best fit's loss over the window (Simulate's residuals' sum of squares).
 absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptions& solver,
                                       const Recording& rec, const StrikeBounds& bounds,
                                       double until_s, double huber_m, Budget* budget,
-                                      bool free_time, bool predict,
-                                      double* loss = nullptr) {
+                                      bool final_fit, double* loss = nullptr) {
   StrikeFit best;
   const int64_t used0 = budget->used();
   const StrikeClock clock = ClockOf(model, rec);
@@ -870,7 +878,7 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
   }
   StrikeMap polish = map;
   polish.clock = clock.Around(best.strike_time_s);
-  if (free_time && polish.clock.fitted) {
+  if (final_fit && polish.clock.fitted) {
     VectorXd u(polish.size());
     polish.FromTimed({best.strike, best.strike_time_s}, u.data());
     if (absl::Status s = RefineStrike(model, solver, rec, polish, windows.back(), huber_m, nullptr,
@@ -882,7 +890,7 @@ absl::StatusOr<StrikeFit> FitStrikeOn(const TableModel& model, const SolverOptio
     if (absl::Status s = keep(polish.ToTimed(u.data())); !s.ok()) return s;
   }
   // A prediction from the shot's start: the plausible strikes weighed.
-  if (predict && (bounds.intent || bounds.central_rest) &&
+  if (final_fit && (bounds.intent || bounds.central_rest) &&
       clock.t0 + until_s < rec.track.back().t_s) {
     if (absl::Status s = WeighPlausible(model, solver, rec, bounds, map, clock.t0 + until_s, all,
                                        huber_m, budget, best_cost, &best);
@@ -997,8 +1005,7 @@ absl::StatusOr<StrikeFit> FitStrike(const TableModel& model, const SolverOptions
   if (absl::Status s = CheckOptions(bounds); !s.ok()) return s;
   if (absl::Status s = CheckHuber(huber_m); !s.ok()) return s;
   Budget budget(std::numeric_limits<int64_t>::max(), nullptr);
-  return FitStrikeOn(model, solver, rec, bounds, until_s, huber_m, &budget, /*free_time=*/true,
-                     /*predict=*/true);
+  return FitStrikeOn(model, solver, rec, bounds, until_s, huber_m, &budget, /*final_fit=*/true);
 }
 
 std::optional<std::pair<double, double>> CalibrationRange(std::string_view name) {
@@ -1254,7 +1261,7 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
     } else {
       absl::StatusOr<StrikeFit> fit =
           FitStrikeOn(*model0, solver, rec, options.strike_bounds, window, options.huber_m, &budget,
-                      /*free_time=*/!joint || sr.heldout, /*predict=*/sr.heldout);
+                      /*final_fit=*/!joint || sr.heldout);
       if (!fit.ok()) {
         return absl::Status(fit.status().code(),
                             absl::StrFormat("recordings[%d]: %s", i, fit.status().message()));
@@ -1412,7 +1419,7 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
                             double* loss) -> absl::StatusOr<TimedStrike> {
       absl::StatusOr<StrikeFit> fit =
           FitStrikeOn(m, solver, recordings[static_cast<size_t>(i)], options.strike_bounds, window_s,
-                      options.huber_m, &budget, /*free_time=*/false, /*predict=*/false, loss);
+                      options.huber_m, &budget, /*final_fit=*/false, loss);
       if (!fit.ok()) return fit.status();
       return TimedStrike{fit->strike, fit->strike_time_s};
     };
@@ -1662,7 +1669,7 @@ absl::StatusOr<CalibrationReport> CalibrateFrom(const TableSpec& spec, const Sol
     if (sr.heldout && !rec.strike) {
       absl::StatusOr<StrikeFit> fit =
           FitStrikeOn(*model1, solver, rec, options.strike_bounds, options.strike_window_s,
-                      options.huber_m, &budget, /*free_time=*/true, /*predict=*/true);
+                      options.huber_m, &budget, /*final_fit=*/true);
       if (!fit.ok()) return fit.status();
       strikes[static_cast<size_t>(i)] = {fit->strike, fit->strike_time_s};
       sr.plausible = fit->plausible;

@@ -147,7 +147,8 @@ struct StrikeBounds {
   ///    best fit's;
   ///  - intent: what the shot was meant to do (empty: nothing assumed), a prior: only the
   ///    plausible strikes that meet it are weighed, where any does; with central_rest off, the
-  ///    best of them is taken.
+  ///    best of them is taken (the best fit itself, and nothing more is tried, where it
+  ///    meets the intent).
   /// Neither is consulted over a whole track (the data decide) or in a calibration's
   /// training fits; a calibration's held-out shots take them.
   bool central_rest = false;

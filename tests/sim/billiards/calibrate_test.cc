@@ -632,7 +632,8 @@ Eigen::Vector2d RestOf(const TableModel& m, const Recording& rec, const CueStrik
 // the shots the window pins down and takes back metres where it does not. Every strike taken
 // fits the window within kPlausibleChi2 of the best fit. An intent no strike meets, or every strike meets, weighs the same strikes and
 // takes the same one to the bit; with neither asked, and over the whole track with both, the
-// best fit stands (nothing weighed), and the prediction is deterministic.
+// best fit stands (nothing weighed), and so it does, played out and nothing more tried, under
+// an intent alone that it meets.
 TEST(CalibrateTest, APredictionFromTheStartTakesTheCentralRest) {
   const TableModel truth = *TableModel::Create(MathavansTable());
   std::mt19937_64 rng(604);
@@ -674,6 +675,18 @@ TEST(CalibrateTest, APredictionFromTheStartTakesTheCentralRest) {
       EXPECT_EQ(whole->plausible, 0);
       EXPECT_EQ(whole->strike.phi_rad, plain->strike.phi_rad);
       EXPECT_EQ(whole->strike.a, plain->strike.a);
+      // The intent alone, met by the best fit: the best fit, at the cost of playing it out.
+      StrikeBounds met;
+      met.intent = both.intent;
+      absl::StatusOr<StrikeFit> agreed = FitStrike(truth, SolverOptions{}, *rec, met, 0.4);
+      ASSERT_TRUE(agreed.ok()) << agreed.status();
+      EXPECT_EQ(agreed->strike.speed_mps, best->strike.speed_mps);
+      EXPECT_EQ(agreed->strike.phi_rad, best->strike.phi_rad);
+      EXPECT_EQ(agreed->strike.a, best->strike.a);
+      EXPECT_EQ(agreed->strike.b, best->strike.b);
+      EXPECT_EQ(agreed->simulations, best->simulations + 1);
+      EXPECT_EQ(agreed->plausible, 1);
+      EXPECT_TRUE(agreed->intent_met);
     }
   }
   const auto mean = [](const std::vector<double>& v) {
