@@ -8,6 +8,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -22,6 +23,7 @@
 #include "sim/billiards/collision.h"
 #include "sim/billiards/shot.h"
 #include "sim/core/units.h"
+#include "sim/games/three_cushion.h"
 
 namespace sportsim::billiards {
 namespace {
@@ -343,7 +345,8 @@ BENCHMARK(BM_ReadCloth)->Arg(50)->Arg(250)->Unit(benchmark::kMillisecond);
 
 // A prediction from a shot's first 0.4 s (FitStrike on a window): range(0) 0, the best fit of
 // the window; 1, the plausible strikes' central rest (StrikeBounds::central_rest: a grid of
-// strikes fitted and played to rest). Four shots of TrackedCaromShots at 50 Hz under their
+// strikes fitted and played to rest); 2, the same with the three-cushion point intended
+// (StrikeBounds::intent: the grid refined where plausible). Four shots of TrackedCaromShots at 50 Hz under their
 // own table; items: shots, so the time per item is a prediction's. The label gives the
 // simulations a shot.
 void BM_PredictFromStart(benchmark::State& state) {
@@ -353,7 +356,8 @@ void BM_PredictFromStart(benchmark::State& state) {
     state.SkipWithError(std::string(recs.status().message()).c_str());
     return;
   }
-  const StrikeBounds bounds{.central_rest = state.range(0) == 1};
+  const StrikeBounds bounds{.central_rest = state.range(0) >= 1,
+                            .intent = state.range(0) == 2 ? games::ThreeCushionIntent() : nullptr};
   int64_t simulations = 0, fits = 0;
   for (auto _ : state) {
     for (const Recording& r : *recs) {
@@ -368,11 +372,12 @@ void BM_PredictFromStart(benchmark::State& state) {
     }
   }
   state.SetLabel(absl::StrFormat("%s, %d simulations a shot",
-                                 state.range(0) == 1 ? "central rest" : "best fit",
+                                 std::array{"best fit", "central rest", "central rest, the point intended"}
+                                     [static_cast<size_t>(state.range(0))],
                                  fits > 0 ? simulations / fits : 0));
   state.SetItemsProcessed(fits);
 }
-BENCHMARK(BM_PredictFromStart)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PredictFromStart)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sportsim::billiards

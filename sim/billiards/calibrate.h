@@ -145,10 +145,12 @@ struct StrikeBounds {
   ///  - central_rest: the strike taken is the one whose rest is the plausible strikes'
   ///    weighted medoid (the least expected distance from where the ball will rest), not the
   ///    best fit's;
-  ///  - intent: what the shot was meant to do (empty: nothing assumed), a prior: only the
-  ///    plausible strikes that meet it are weighed, where any does; with central_rest off, the
-  ///    best of them is taken (the best fit itself, and nothing more is tried, where it
-  ///    meets the intent).
+  ///  - intent: what the shot was meant to do (empty: nothing assumed), a prior: the grid is
+  ///    refined where it is plausible (a band of strikes that meet an intent can be narrower
+  ///    than its step), and only the plausible strikes that meet it are weighed, where any
+  ///    does (else the coarse grid's, as with no intent); with central_rest off, the best of
+  ///    them is taken (the best fit itself, and nothing more is tried, where it meets the
+  ///    intent).
   /// Neither is consulted over a whole track (the data decide) or in a calibration's
   /// training fits; a calibration's held-out shots take them.
   bool central_rest = false;
@@ -165,8 +167,8 @@ struct StrikeFit {
   double strike_time_s = 0.0;  ///< on the track's clock (the recording's when known)
   ShotError error;        ///< over the points fitted
   int64_t simulations = 0;
-  /// A prediction's (StrikeBounds::central_rest, intent): the plausible strikes weighed (0:
-  /// none, the best fit taken), whether the strike taken meets the intent, and its loss over
+  /// A prediction's (StrikeBounds::central_rest, intent): the plausible strikes found (0:
+  /// none weighed, the best fit taken), whether the strike taken meets the intent, and its loss over
   /// the window above the best fit's, in the residuals' variances.
   int plausible = 0;
   bool intent_met = false;
