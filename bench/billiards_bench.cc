@@ -346,9 +346,9 @@ BENCHMARK(BM_ReadCloth)->Arg(50)->Arg(250)->Unit(benchmark::kMillisecond);
 // A prediction from a shot's first 0.4 s (FitStrike on a window): range(0) 0, the best fit of
 // the window; 1, the plausible strikes' central rest (StrikeBounds::central_rest: a grid of
 // strikes fitted and played to rest); 2, the same with the three-cushion point intended
-// (StrikeBounds::intent: the grid refined where plausible). Four shots of TrackedCaromShots at 50 Hz under their
-// own table; items: shots, so the time per item is a prediction's. The label gives the
-// simulations a shot.
+// (StrikeBounds::intent: the grid refined where plausible). Four shots of TrackedCaromShots
+// at 50 Hz under their own table; items: shots, so the time per item is a prediction's. The
+// label gives the simulations a shot.
 void BM_PredictFromStart(benchmark::State& state) {
   const TableModel model = *TableModel::Create(*MakeTablePreset("carom"));
   absl::StatusOr<std::vector<Recording>> recs = TrackedCaromShots(model, 50.0, 4);
@@ -371,9 +371,9 @@ void BM_PredictFromStart(benchmark::State& state) {
       benchmark::DoNotOptimize(fit->strike);
     }
   }
+  constexpr std::array kLabels{"best fit", "central rest", "central rest, the point intended"};
   state.SetLabel(absl::StrFormat("%s, %d simulations a shot",
-                                 std::array{"best fit", "central rest", "central rest, the point intended"}
-                                     [static_cast<size_t>(state.range(0))],
+                                 kLabels[static_cast<size_t>(state.range(0))],
                                  fits > 0 ? simulations / fits : 0));
   state.SetItemsProcessed(fits);
 }
