@@ -168,8 +168,8 @@ struct StrikeFit {
   ShotError error;        ///< over the points fitted
   int64_t simulations = 0;
   /// A prediction's (StrikeBounds::central_rest, intent): the plausible strikes found (0:
-  /// none weighed, the best fit taken), whether the strike taken meets the intent, and its loss over
-  /// the window above the best fit's, in the residuals' variances.
+  /// none weighed, the best fit taken), whether the strike taken meets the intent, and its
+  /// loss over the window above the best fit's, in the residuals' variances.
   int plausible = 0;
   bool intent_met = false;
   double window_chi2 = 0.0;
