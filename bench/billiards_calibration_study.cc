@@ -509,7 +509,8 @@ void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
 // --preset P under that preset's table, on their first 0.4 s: the best fit, the central rest,
 // and the central rest of the strikes that score. Per shot and way: where the struck ball ends
 // against where it was last tracked (mm) and whether the fitted shot scores the point; the
-// simulations of each. On stderr the medians.
+// simulations of each. On stderr the medians, and in how many shots each way's struck ball
+// meets the first three rails its track shows, in order (TrackedRails, as the study's rows).
 void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const TableSpec& spec) {
   const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed, elevation);
   const TableModel m = *TableModel::Create(spec);
@@ -524,10 +525,11 @@ void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const T
   std::printf("shot,best_fit_mm,central_mm,intent_mm,best_fit_scores,central_scores,intent_scores,"
               "best_fit_simulations,central_simulations,intent_simulations\n");
   std::array<std::vector<double>, 3> err;
-  std::array<int, 3> scores = {0, 0, 0};
+  std::array<int, 3> scores = {0, 0, 0}, rails = {0, 0, 0};
   for (size_t i = 0; i < recs.size(); ++i) {
+    const std::vector<Rail> recorded = FirstThree(TrackedRails(m, recs[i], recs[i].cue));
     std::array<double, 3> e{};
-    std::array<int, 3> scored{};
+    std::array<int, 3> scored{}, railed{};
     std::array<long long, 3> sims{};
     bool ok = true;
     for (size_t w = 0; w < ways.size() && ok; ++w) {
@@ -544,12 +546,14 @@ void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const T
       }
       e[w] = (o.rest - LastTracked(recs[i])).norm();
       scored[w] = o.point ? 1 : 0;
+      railed[w] = o.rails == recorded ? 1 : 0;
       sims[w] = fit->simulations;
     }
     if (!ok) continue;
     for (size_t w = 0; w < ways.size(); ++w) {
       err[w].push_back(e[w]);
       scores[w] += scored[w];
+      rails[w] += railed[w];
     }
     std::printf("%zu,%.0f,%.0f,%.0f,%d,%d,%d,%lld,%lld,%lld\n", i, 1e3 * e[0], 1e3 * e[1], 1e3 * e[2],
                 scored[0], scored[1], scored[2], sims[0], sims[1], sims[2]);
@@ -559,6 +563,8 @@ void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const T
                "(central rest), %.0f mm (central rest, the point intended); the point scored in "
                "%d, %d and %d of %zu\n", 1e3 * Median(err[0]), 1e3 * Median(err[1]),
                1e3 * Median(err[2]), scores[0], scores[1], scores[2], err[0].size());
+  std::fprintf(stderr, "predict recovery: the track's first three rails met in %d, %d and %d of %zu\n",
+               rails[0], rails[1], rails[2], err[0].size());
 }
 
 // Slip-speed friction read back from tracks: n synthetic recordings made with u_c = `fade` (the
