@@ -552,11 +552,15 @@ TEST(CalibrateTest, FitStrikeFindsTheStrikeOnATrackersClock) {
 }
 
 // Two fits that must be the same to the bit: their strikes, times and work.
+void ExpectSameStrike(const CueStrike& x, const CueStrike& y) {
+  EXPECT_EQ(x.speed_mps, y.speed_mps);
+  EXPECT_EQ(x.phi_rad, y.phi_rad);
+  EXPECT_EQ(x.a, y.a);
+  EXPECT_EQ(x.b, y.b);
+}
+
 void ExpectSameFit(const StrikeFit& x, const StrikeFit& y) {
-  EXPECT_EQ(x.strike.speed_mps, y.strike.speed_mps);
-  EXPECT_EQ(x.strike.phi_rad, y.strike.phi_rad);
-  EXPECT_EQ(x.strike.a, y.strike.a);
-  EXPECT_EQ(x.strike.b, y.strike.b);
+  ExpectSameStrike(x.strike, y.strike);
   EXPECT_EQ(x.strike_time_s, y.strike_time_s);
   EXPECT_EQ(x.simulations, y.simulations);
 }
@@ -670,10 +674,7 @@ TEST(CalibrateTest, APredictionFromTheStartTakesTheCentralRest) {
         EXPECT_EQ(refined->intent_met, says);
         EXPECT_LE(refined->window_chi2, kPlausibleChi2);
         if (!says) {  // the same strike, though found among more
-          EXPECT_EQ(refined->strike.speed_mps, fit->strike.speed_mps);
-          EXPECT_EQ(refined->strike.phi_rad, fit->strike.phi_rad);
-          EXPECT_EQ(refined->strike.a, fit->strike.a);
-          EXPECT_EQ(refined->strike.b, fit->strike.b);
+          ExpectSameStrike(refined->strike, fit->strike);
           EXPECT_EQ(refined->window_chi2, fit->window_chi2);
         }
       }
@@ -683,17 +684,13 @@ TEST(CalibrateTest, APredictionFromTheStartTakesTheCentralRest) {
       absl::StatusOr<StrikeFit> plain = FitStrike(truth, SolverOptions{}, *rec);
       ASSERT_TRUE(whole.ok() && plain.ok());
       EXPECT_EQ(whole->plausible, 0);
-      EXPECT_EQ(whole->strike.phi_rad, plain->strike.phi_rad);
-      EXPECT_EQ(whole->strike.a, plain->strike.a);
+      ExpectSameStrike(whole->strike, plain->strike);
       // The intent alone, met by the best fit: the best fit, at the cost of playing it out.
       StrikeBounds met;
       met.intent = both.intent;
       absl::StatusOr<StrikeFit> agreed = FitStrike(truth, SolverOptions{}, *rec, met, 0.4);
       ASSERT_TRUE(agreed.ok()) << agreed.status();
-      EXPECT_EQ(agreed->strike.speed_mps, best->strike.speed_mps);
-      EXPECT_EQ(agreed->strike.phi_rad, best->strike.phi_rad);
-      EXPECT_EQ(agreed->strike.a, best->strike.a);
-      EXPECT_EQ(agreed->strike.b, best->strike.b);
+      ExpectSameStrike(agreed->strike, best->strike);
       EXPECT_EQ(agreed->simulations, best->simulations + 1);
       EXPECT_EQ(agreed->plausible, 1);
       EXPECT_TRUE(agreed->intent_met);
