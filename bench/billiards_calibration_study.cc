@@ -36,7 +36,9 @@
 //  - --intent three-cushion: every strike fitted on a shot's start takes the three-cushion
 //    player's intent as its prior (StrikeBounds::intent, games::ThreeCushionIntent: of the
 //    strikes that fit the start about as well as the best, only those that score the point);
-//    sources end in -intent.
+//    sources end in -intent. --intent pot: the pool player's (games::PotIntent, a ball
+//    pocketed and the struck ball kept up), for recorded pool shots (--no-synthetic
+//    --recordings PATH --preset pool-9ft); on the synthetic carom shots it is never met.
 //  - --elevation LO:HI: the synthetic cues raised LO to HI degrees (a raised cue's side spin
 //    curves the path from the start); --fit-elevation fits the cue's elevation with every
 //    strike (else level). Raised shots' source ends in -raised.
@@ -61,7 +63,7 @@
 //          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
 //          [--cushion-on-read-cloth] [--strike-recovery] [--fade-recovery U]
 //          [--ball-ball-model alciatore|mathavan2014] [--scoring] [--predict best-fit|central]
-//          [--intent three-cushion] [--predict-recovery]
+//          [--intent three-cushion|pot] [--predict-recovery]
 //
 // --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
 // --ball-ball-model mathavan2014: every row with Mathavan's integrated ball-ball impact
@@ -99,6 +101,7 @@
 #include "sim/billiards/shot.h"
 #include "sim/billiards/track_file.h"
 #include "sim/core/cpu_clock.h"
+#include "sim/games/pool.h"
 #include "sim/games/three_cushion.h"
 
 namespace sportsim::billiards {
@@ -690,11 +693,15 @@ int main(int argc, char** argv) {
     } else if (!std::strcmp(argv[i], "--scoring")) {
       scoring_only = true;
     } else if (!std::strcmp(argv[i], "--intent") && i + 1 < argc) {
-      if (std::strcmp(argv[++i], "three-cushion") != 0) {
-        std::fprintf(stderr, "--intent: three-cushion\n");
+      const std::string_view intent = argv[++i];
+      if (intent == "three-cushion") {
+        strike_bounds.intent = sportsim::games::ThreeCushionIntent();
+      } else if (intent == "pot") {
+        strike_bounds.intent = sportsim::games::PotIntent();
+      } else {
+        std::fprintf(stderr, "--intent: three-cushion or pot\n");
         return 2;
       }
-      strike_bounds.intent = sportsim::games::ThreeCushionIntent();
     } else if (!std::strcmp(argv[i], "--aimed")) {
       aimed = true;
     } else if (!std::strcmp(argv[i], "--fit-elevation")) {
@@ -745,7 +752,7 @@ int main(int argc, char** argv) {
                    "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
                    "[--strike-recovery] [--predict-recovery] [--read-cloth] [--fade-recovery U] "
                    "[--ball-ball-model alciatore|mathavan2014] [--scoring] "
-                   "[--predict best-fit|central] [--intent three-cushion]\n");
+                   "[--predict best-fit|central] [--intent three-cushion|pot]\n");
       return 2;
     }
   }

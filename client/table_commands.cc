@@ -91,7 +91,8 @@ ABSL_FLAG(std::string, predict, "best-fit",
           "it best) or central (the plausible strikes' central rest)");
 ABSL_FLAG(std::string, intent, "none",
           "table calibrate: what the held-out shots were meant to do, a prior for predictions "
-          "from a --window: none or three-cushion (the UMB point)");
+          "from a --window: none, three-cushion (the UMB point) or pot (a ball pocketed, "
+          "the struck ball kept up)");
 ABSL_FLAG(bool, read_cloth, false,
           "table calibrate: read the cloth (rolling resistance, sliding friction) from the "
           "training shots' tracks and start from it");
@@ -780,8 +781,10 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
   }
   if (const std::string i = absl::GetFlag(FLAGS_intent); i == "three-cushion") {
     request.set_intent(v1::SHOT_INTENT_THREE_CUSHION_POINT);
+  } else if (i == "pot") {
+    request.set_intent(v1::SHOT_INTENT_POT);
   } else if (i != "none") {
-    return UsageError("--intent: none or three-cushion, got '" + i + "'");
+    return UsageError("--intent: none, three-cushion or pot, got '" + i + "'");
   }
   request.set_read_cloth(absl::GetFlag(FLAGS_read_cloth));
   if (const auto h = absl::GetFlag(FLAGS_huber)) request.set_huber_m(*h);

@@ -11,6 +11,7 @@
 #include "server/billiards/convert.h"
 #include "server/world/world.h"
 #include "sim/core/units.h"
+#include "sim/games/pool.h"
 #include "sim/games/three_cushion.h"
 
 namespace sportsim::server {
@@ -242,9 +243,16 @@ absl::StatusOr<CalibrationJob> CalibrationJobFromProto(const v1::CalibrateTableR
       }
       o.strike_bounds.intent = games::ThreeCushionIntent();
       break;
+    case v1::SHOT_INTENT_POT:
+      if (job.spec.pockets.empty()) {
+        return absl::InvalidArgumentError(absl::StrFormat(
+            "intent: POT needs a table with pockets; table '%s' has none", job.spec.name));
+      }
+      o.strike_bounds.intent = games::PotIntent();
+      break;
     default:
       return absl::InvalidArgumentError(absl::StrFormat(
-          "intent: %d is not a ShotIntent (NONE, THREE_CUSHION_POINT)", request.intent()));
+          "intent: %d is not a ShotIntent (NONE, THREE_CUSHION_POINT, POT)", request.intent()));
   }
   o.huber_m = request.huber_m();  // checked with the rest below
   o.read_cloth = request.read_cloth();

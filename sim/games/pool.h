@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "absl/status/statusor.h"
+#include "sim/billiards/calibrate.h"
 #include "sim/billiards/model.h"
 #include "sim/billiards/state.h"
 #include "sim/games/game.h"
@@ -36,6 +37,14 @@ absl::StatusOr<std::vector<billiards::Ball>> PoolRack(GameKind game,
 int PoolNumber(std::string_view id);
 /// 8-ball group of a ball number: 1-7 solids, 9-15 stripes, else none.
 Group GroupOf(int number);
+
+/// The pool player's intent, a prior for fitting a recorded shot's strike from its start
+/// (billiards::StrikeBounds::intent): the struck ball pockets another ball and stays on the
+/// table. It touches a ball, some other ball drops into a pocket (leaving the table is not a
+/// pot), and the struck ball neither drops nor leaves the table. Which ball, in which pocket,
+/// and whether the game allowed it (the lowest ball first, a called pocket) are not asked: a
+/// recording does not say which game, or which call. Never met on a table without pockets.
+billiards::ShotIntent PotIntent();
 
 }  // namespace sportsim::games
 

@@ -1686,11 +1686,41 @@ class CalibrateAgainstServer(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertRegex(r.stdout, r"b\.csv .*held out, predicted from \d+ plausible strikes")
         for flag, value, needle in (("--predict", "median", "--predict: best-fit or central"),
-                                    ("--intent", "pool", "--intent: none or three-cushion")):
+                                    ("--intent", "pool", "--intent: none, three-cushion or pot")):
             r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
                     flag, value)
             self.assertEqual(r.returncode, 64, r.stderr)
             self.assertIn(needle, r.stderr)
+
+    def test_held_out_pots_predicted_with_the_pot_intended(self):
+        # Two pots on a 9 ft table, the second held out and fitted on its first 0.4 s with the
+        # pool player's intent: its predicted strike pots the 1 and keeps the cue ball up. A pot
+        # meant on a carom table is refused, naming the field.
+        files = []
+        for name, cue, obj, phi, b in (("a.csv", "-0.0156,0.1687", "1.0,0.45", "14.418", "0.3"),
+                                       ("b.csv", "0.1136,-0.3052", "0.9,0.4", "42.421", "-0.3")):
+            r = cli(self.server.address, "--format", "csv", "shot", "simulate", "--table",
+                    "pool-9ft", "--rack", "empty", "--ball", "cue@" + cue, "--ball", "1@" + obj,
+                    "--strike-ball", "cue", "--ball-speed", "2.5", "--phi", phi, "--b", b,
+                    "--sample-rate", "50")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn(",1,", r.stdout.splitlines()[-1])
+            self.assertTrue(r.stdout.rstrip().endswith(",pocketed"), r.stdout[-200:])
+            path = os.path.join(self.dir.name, "pot-" + name)
+            with open(path, "w") as f:
+                f.write(r.stdout)
+            files.append(path)
+        r = cli(self.server.address, "--format", "json", "--timeout", "300s", "table",
+                "calibrate", *files, "--table", "pool-9ft", "--heldout", "1", "--window", "0.4",
+                "--predict", "central", "--intent", "pot")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        report = json.loads(r.stdout)
+        self.assertGreaterEqual(report["shots"][1]["plausible"], 1)
+        self.assertIs(report["shots"][1]["intent_met"], True)
+        r = cli(self.server.address, "table", "calibrate", *files, "--table", "carom",
+                "--heldout", "1", "--window", "0.4", "--intent", "pot")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("intent: POT needs a table with pockets; table 'carom' has none", r.stderr)
 
     def test_json_lines_track_files_calibrate_as_their_csv(self):
         # A recording's first 0.3 s as CSV and as JSON lines (as a tracker logging a detection

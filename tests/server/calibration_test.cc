@@ -320,6 +320,15 @@ TEST_F(CalibrationTest, BadRequestsAreInvalidArgumentNamingTheField) {
   *two = kept;
   EXPECT_THAT(refused(req), HasSubstr("intent: THREE_CUSHION_POINT needs three balls on the table; "
                                       "shots[1] has 2"));
+  // A pot on a table without pockets; on a pool table the same shots take the pot's intent.
+  req = good;
+  req.set_intent(v1::SHOT_INTENT_POT);
+  EXPECT_THAT(refused(req), HasSubstr("intent: POT needs a table with pockets; table 'carom' has "
+                                      "none"));
+  req.mutable_table()->set_preset("pool-9ft");
+  absl::StatusOr<CalibrationJob> pool = CalibrationJobFromProto(req);
+  ASSERT_TRUE(pool.ok()) << pool.status();
+  EXPECT_TRUE(static_cast<bool>(pool->options.strike_bounds.intent));
 }
 
 // A held-out shot fitted on its first 0.4 s only, its strike taken as the plausible strikes'
