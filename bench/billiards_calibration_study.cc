@@ -63,7 +63,7 @@
 //          [--elevation LO:HI] [--fit-elevation] [--resample] [--model M]...
 //          [--cushion-on-read-cloth] [--strike-recovery] [--fade-recovery U]
 //          [--ball-ball-model alciatore|mathavan2014] [--scoring] [--predict best-fit|central]
-//          [--intent three-cushion|pot] [--predict-recovery]
+//          [--intent three-cushion|pot] [--predict-recovery [--pots]]
 //
 // --model M: study only cushion model M (han, mathavan2010, stronge; repeatable); default all.
 // --ball-ball-model mathavan2014: every row with Mathavan's integrated ball-ball impact
@@ -78,7 +78,9 @@
 // --fit-elevation apply).
 // --predict-recovery: instead, what the central rest and the intent gain a prediction from a
 // shot's first 0.4 s under the reference table itself or --preset's (PredictRecovery;
-// --shots, --aimed, --scoring, --elevation, --huber and --fit-elevation apply).
+// --shots, --aimed, --scoring, --elevation, --huber and --fit-elevation apply). With --pots,
+// on long pots of a pool table (--preset, default pool-9ft) under its own constants, the pool
+// player's intent weighed (SyntheticPots; --shots, --huber and --fit-elevation apply).
 // --strike-recovery: instead, how well the strike fit alone finds the synthetic shots'
 // strikes, each start alone and resampled, under the reference table itself or --preset's
 // (StrikeRecovery; --shots, --aimed, --huber and --fit-elevation apply).
@@ -215,6 +217,57 @@ std::vector<Recording> Synthetic(int n, uint64_t seed, double false_detections =
   return out;
 }
 
+// n long pots on a pool table under its own constants, tracked at 50 Hz with 1 mm of noise by
+// a tracker whose clock starts 0.1-0.5 s before the strike: the object ball 0.25-1 m from a
+// pocket (the pockets in turn), the cue ball 0.8-1.8 m behind the ghost ball at a cut of up
+// to 35 degrees (so that a 0.4 s window mostly ends before they meet), struck at 1.5-4 m/s
+// through the ghost ball's centre with up to 0.4 R of side and 0.5 R of height; drawn until the
+// shot pots the object ball and leaves the cue ball up (games::PotIntent).
+std::vector<Recording> SyntheticPots(int n, uint64_t seed, const TableSpec& spec) {
+  const TableModel m = *TableModel::Create(spec);
+  const double r = m.radius();
+  const double hx = 0.5 * spec.length_m - 2 * r, hy = 0.5 * spec.width_m - 2 * r;
+  std::mt19937_64 rng(seed);
+  std::mt19937_64 clock_rng(seed + 1);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const ShotIntent pot = games::PotIntent();
+  std::vector<Recording> out;
+  for (size_t k = 0; static_cast<int>(out.size()) < n && k < 1000 * static_cast<size_t>(n); ++k) {
+    const Eigen::Vector2d pocket = spec.pockets[k % spec.pockets.size()].centre;
+    const double deg = std::numbers::pi / 180.0;
+    const Eigen::Vector2d along = Eigen::Rotation2Dd((u(rng) - 0.5) * 60 * deg) * (-pocket).normalized();
+    const Eigen::Vector2d object = pocket + (0.25 + 0.75 * u(rng)) * along;
+    const Eigen::Vector2d line = (pocket - object).normalized();
+    const Eigen::Vector2d ghost = object - 2 * r * line;
+    const Eigen::Vector2d cue =
+        ghost - (0.8 + u(rng)) * (Eigen::Rotation2Dd((u(rng) - 0.5) * 70 * deg) * line);
+    const Eigen::Vector2d aim = ghost - cue;
+    CueStrike c{.speed_mps = 1.5 + 2.5 * u(rng), .ball_speed = true,
+                .phi_rad = std::atan2(aim.y(), aim.x()), .a = 0.8 * (u(rng) - 0.5),
+                .b = u(rng) - 0.5};
+    const double strike_time = 0.1 + 0.4 * u(clock_rng);
+    const auto on_cloth = [&](const Eigen::Vector2d& p) {
+      return std::abs(p.x()) < hx && std::abs(p.y()) < hy;
+    };
+    if (!on_cloth(object) || !on_cloth(cue)) continue;
+    TableState s;
+    s.balls.push_back(Ball{.id = "cue", .r = Eigen::Vector3d(cue.x(), cue.y(), r)});
+    s.balls.push_back(Ball{.id = "1", .r = Eigen::Vector3d(object.x(), object.y(), r)});
+    TableState struck = s;
+    if (!ApplyStrike(m, 0, c, 0, &struck).ok()) continue;
+    absl::StatusOr<ShotResult> shot = SimulateShot(m, SolverOptions{}, struck, ShotOptions{});
+    if (!shot.ok() || !pot(s, 0, shot->events)) continue;
+    absl::StatusOr<Recording> rec = SyntheticRecording(
+        m, SolverOptions{}, s, 0, c,
+        SyntheticOptions{.rate_hz = 50, .noise_m = 1e-3, .seed = seed + out.size(),
+                         .strike_time_s = strike_time, .keep_strike_time = false});
+    if (!rec.ok()) continue;
+    rec->name = "pot" + std::to_string(out.size());
+    out.push_back(*std::move(rec));
+  }
+  return out;
+}
+
 // The recorded shots at `path` (a file, or a directory of them), at most `max_shots` of them
 // spread evenly through the whole; unusable shots are skipped with a note on stderr.
 std::vector<Recording> FromPath(const std::string& path, const TableModel& model,
@@ -322,7 +375,8 @@ struct Outcome {
   bool played = false;
   double cpu_s = 0.0;
 };
-Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike) {
+Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike,
+             const ShotIntent& meant = games::ThreeCushionIntent()) {
   Outcome o;
   TableState s = rec.initial;
   if (!ApplyStrike(m, 0, strike, rec.cue, &s).ok()) return o;
@@ -332,7 +386,7 @@ Outcome Play(const TableModel& m, const Recording& rec, const CueStrike& strike)
   if (!r.ok()) return o;
   o.rails = FirstThree(SimulatedRails(m.spec(), r->events, rec.cue));
   o.rest = r->final_state.balls[static_cast<size_t>(rec.cue)].r.head<2>();
-  o.point = games::ThreeCushionIntent()(rec.initial, rec.cue, r->events);
+  o.point = meant(rec.initial, rec.cue, r->events);
   o.played = true;
   return o;
 }
@@ -507,17 +561,22 @@ void StrikeRecovery(int n, bool aimed, const TableSpec& spec) {
 }
 
 // What a prediction from a shot's first 0.4 s gains from weighing its plausible strikes
-// (StrikeBounds::central_rest) and from the three-cushion player's intent (intent), at best:
-// the synthetic recordings fitted under the reference table itself (no model error), or with
-// --preset P under that preset's table, on their first 0.4 s: the best fit, the central rest,
-// and the central rest of the strikes that score. Per shot and way: where the struck ball ends
-// against where it was last tracked (mm) and whether the fitted shot scores the point; the
-// simulations of each. On stderr the medians, and in how many shots each way's struck ball
-// meets the first three rails its track shows, in order (TrackedRails, as the study's rows).
-void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const TableSpec& spec) {
-  const std::vector<Recording> recs = Synthetic(n, 33, 0.0, aimed, elevation);
+// (StrikeBounds::central_rest) and from the player's intent (intent), at best: the recordings
+// (synthetic, made under `spec`) fitted under `spec` itself (no model error) on their first
+// 0.4 s: the best fit, the central rest, and the central rest of the strikes that do what was
+// meant (`meant`: the three-cushion point, or a pot; its words name it in the summaries). Per
+// shot and way: where the struck ball ends against where it was last tracked (mm) and whether
+// the fitted shot does what was meant (the CSV's "scores" columns); the simulations of each.
+// On stderr the medians, and in how many shots each way's struck ball meets the first three
+// rails its track shows, in order (TrackedRails, as the study's rows).
+struct Meant {
+  ShotIntent intent;
+  const char* intended;  // "the point intended"
+  const char* met;       // "the point scored"
+};
+void PredictRecovery(const std::vector<Recording>& recs, const TableSpec& spec, const Meant& meant) {
   const TableModel m = *TableModel::Create(spec);
-  const ShotIntent point = games::ThreeCushionIntent();
+  const ShotIntent& point = meant.intent;
   std::array<StrikeBounds, 3> ways = {strike_bounds, strike_bounds, strike_bounds};
   ways[0].central_rest = false;
   ways[0].intent = nullptr;
@@ -542,7 +601,7 @@ void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const T
         ok = false;
         break;
       }
-      const Outcome o = Play(m, recs[i], fit->strike);
+      const Outcome o = Play(m, recs[i], fit->strike, point);
       if (!o.played) {
         ok = false;
         break;
@@ -563,9 +622,9 @@ void PredictRecovery(int n, bool aimed, std::array<double, 2> elevation, const T
     std::fflush(stdout);
   }
   std::fprintf(stderr, "predict recovery: median final position %.0f mm (best fit), %.0f mm "
-               "(central rest), %.0f mm (central rest, the point intended); the point scored in "
-               "%d, %d and %d of %zu\n", 1e3 * Median(err[0]), 1e3 * Median(err[1]),
-               1e3 * Median(err[2]), scores[0], scores[1], scores[2], err[0].size());
+               "(central rest), %.0f mm (central rest, %s); %s in %d, %d and %d of %zu\n",
+               1e3 * Median(err[0]), 1e3 * Median(err[1]), 1e3 * Median(err[2]), meant.intended,
+               meant.met, scores[0], scores[1], scores[2], err[0].size());
   std::fprintf(stderr, "predict recovery: the track's first three rails met in %d, %d and %d of %zu\n",
                rails[0], rails[1], rails[2], err[0].size());
 }
@@ -649,6 +708,7 @@ int main(int argc, char** argv) {
   std::string path, preset = "carom", origin = "centre", write_set;
   double scale = 1.0, false_detections = 0.0;
   bool aimed = false, strike_recovery = false, predict_recovery = false, preset_given = false, read_cloth = false;
+  bool pots = false;
   double fade_recovery = -1.0;
   std::array<double, 2> elevation = {0.0, 0.0};
   for (int i = 1; i < argc; ++i) {
@@ -656,6 +716,8 @@ int main(int argc, char** argv) {
       strike_recovery = true;
     } else if (!std::strcmp(argv[i], "--predict-recovery")) {
       predict_recovery = true;
+    } else if (!std::strcmp(argv[i], "--pots")) {
+      pots = true;
     } else if (!std::strcmp(argv[i], "--fade-recovery") && i + 1 < argc) {
       fade_recovery = std::atof(argv[++i]);
       if (!(fade_recovery >= 0.0 && fade_recovery <= 1.0)) {
@@ -750,7 +812,7 @@ int main(int argc, char** argv) {
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
                    "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
-                   "[--strike-recovery] [--predict-recovery] [--read-cloth] [--fade-recovery U] "
+                   "[--strike-recovery] [--predict-recovery [--pots]] [--read-cloth] [--fade-recovery U] "
                    "[--ball-ball-model alciatore|mathavan2014] [--scoring] "
                    "[--predict best-fit|central] [--intent three-cushion|pot]\n");
       return 2;
@@ -758,6 +820,16 @@ int main(int argc, char** argv) {
   }
   if (fade_recovery >= 0.0) {
     FadeRecovery(shots, fade_recovery);
+    return 0;
+  }
+  if (predict_recovery && pots) {
+    absl::StatusOr<TableSpec> spec = MakeTablePreset(preset_given ? preset : "pool-9ft");
+    if (!spec.ok() || spec->pockets.empty()) {
+      std::fprintf(stderr, "--pots: --preset must be a table with pockets\n");
+      return 2;
+    }
+    PredictRecovery(SyntheticPots(shots, 61, *spec), *spec,
+                    {sportsim::games::PotIntent(), "a pot intended", "a pot made"});
     return 0;
   }
   if (strike_recovery || predict_recovery) {
@@ -769,7 +841,9 @@ int main(int argc, char** argv) {
     if (strike_recovery) {
       StrikeRecovery(shots, aimed, preset_given ? *spec : ReferenceTable());
     } else {
-      PredictRecovery(shots, aimed, elevation, preset_given ? *spec : ReferenceTable());
+      PredictRecovery(Synthetic(shots, 33, 0.0, aimed, elevation),
+                      preset_given ? *spec : ReferenceTable(),
+                      {sportsim::games::ThreeCushionIntent(), "the point intended", "the point scored"});
     }
     return 0;
   }

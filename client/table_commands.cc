@@ -913,7 +913,8 @@ int RunCalibrate(const Context& ctx, Stub& stub, const std::vector<std::string>&
       std::string note = c.heldout() ? "held out" : "";
       if (c.plausible() > 0) {
         absl::StrAppend(&note,
-                        absl::StrFormat(", predicted from %d plausible strikes", c.plausible()));
+                        absl::StrFormat(", predicted from %d plausible strike%s", c.plausible(),
+                                        c.plausible() == 1 ? "" : "s"));
         if (c.intent_met()) absl::StrAppend(&note, ", as intended");
       }
       std::cout << absl::StrFormat("%-22s %9.1f %9.1f %9.4f  %s\n", c.name(), 1e3 * c.before().mean_m(),

@@ -1684,7 +1684,7 @@ class CalibrateAgainstServer(unittest.TestCase):
         r = cli(self.server.address, "--timeout", "300s", "table", "calibrate", *self.files,
                 "--table", "carom", "--heldout", "1", "--window", "0.4", "--predict", "central")
         self.assertEqual(r.returncode, 0, r.stderr)
-        self.assertRegex(r.stdout, r"b\.csv .*held out, predicted from \d+ plausible strikes")
+        self.assertRegex(r.stdout, r"b\.csv .*held out, predicted from \d+ plausible strikes?")
         for flag, value, needle in (("--predict", "median", "--predict: best-fit or central"),
                                     ("--intent", "pool", "--intent: none, three-cushion or pot")):
             r = cli(self.server.address, "table", "calibrate", *self.files, "--table", "carom",
@@ -1717,6 +1717,12 @@ class CalibrateAgainstServer(unittest.TestCase):
         report = json.loads(r.stdout)
         self.assertGreaterEqual(report["shots"][1]["plausible"], 1)
         self.assertIs(report["shots"][1]["intent_met"], True)
+        r = cli(self.server.address, "--timeout", "300s", "table", "calibrate", *files,
+                "--table", "pool-9ft", "--heldout", "1", "--window", "0.4", "--predict",
+                "central", "--intent", "pot")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertRegex(r.stdout, r"pot-b\.csv .*held out, predicted from (1 plausible strike|"
+                                   r"\d+ plausible strikes), as intended")
         r = cli(self.server.address, "table", "calibrate", *files, "--table", "carom",
                 "--heldout", "1", "--window", "0.4", "--intent", "pot")
         self.assertNotEqual(r.returncode, 0)
