@@ -235,7 +235,8 @@ std::vector<Recording> SyntheticPots(int n, uint64_t seed, const TableSpec& spec
   for (size_t k = 0; static_cast<int>(out.size()) < n && k < 1000 * static_cast<size_t>(n); ++k) {
     const Eigen::Vector2d pocket = spec.pockets[k % spec.pockets.size()].centre;
     const double deg = std::numbers::pi / 180.0;
-    const Eigen::Vector2d along = Eigen::Rotation2Dd((u(rng) - 0.5) * 60 * deg) * (-pocket).normalized();
+    const Eigen::Vector2d along =
+        Eigen::Rotation2Dd((u(rng) - 0.5) * 60 * deg) * (-pocket).normalized();
     const Eigen::Vector2d object = pocket + (0.25 + 0.75 * u(rng)) * along;
     const Eigen::Vector2d line = (pocket - object).normalized();
     const Eigen::Vector2d ghost = object - 2 * r * line;
@@ -574,7 +575,8 @@ struct Meant {
   const char* intended;  // "the point intended"
   const char* met;       // "the point scored"
 };
-void PredictRecovery(const std::vector<Recording>& recs, const TableSpec& spec, const Meant& meant) {
+void PredictRecovery(const std::vector<Recording>& recs, const TableSpec& spec,
+                     const Meant& meant) {
   const TableModel m = *TableModel::Create(spec);
   const ShotIntent& point = meant.intent;
   std::array<StrikeBounds, 3> ways = {strike_bounds, strike_bounds, strike_bounds};
@@ -812,7 +814,8 @@ int main(int argc, char** argv) {
                    "[--track-scale S] [--recorded-shots N] [--write-set FILE] "
                    "[--false-detections F] [--huber M] [--aimed] [--elevation LO:HI] "
                    "[--fit-elevation] [--resample] [--model M]... [--cushion-on-read-cloth] "
-                   "[--strike-recovery] [--predict-recovery [--pots]] [--read-cloth] [--fade-recovery U] "
+                   "[--strike-recovery] [--predict-recovery [--pots]] [--read-cloth] "
+                   "[--fade-recovery U] "
                    "[--ball-ball-model alciatore|mathavan2014] [--scoring] "
                    "[--predict best-fit|central] [--intent three-cushion|pot]\n");
       return 2;
@@ -821,6 +824,10 @@ int main(int argc, char** argv) {
   if (fade_recovery >= 0.0) {
     FadeRecovery(shots, fade_recovery);
     return 0;
+  }
+  if (pots && !predict_recovery) {
+    std::fprintf(stderr, "--pots: only with --predict-recovery\n");
+    return 2;
   }
   if (predict_recovery && pots) {
     absl::StatusOr<TableSpec> spec = MakeTablePreset(preset_given ? preset : "pool-9ft");
@@ -843,7 +850,8 @@ int main(int argc, char** argv) {
     } else {
       PredictRecovery(Synthetic(shots, 33, 0.0, aimed, elevation),
                       preset_given ? *spec : ReferenceTable(),
-                      {sportsim::games::ThreeCushionIntent(), "the point intended", "the point scored"});
+                      {sportsim::games::ThreeCushionIntent(), "the point intended",
+                       "the point scored"});
     }
     return 0;
   }

@@ -278,8 +278,8 @@ std::vector<CommandSpec> MakeSpecs() {
               {"predict", "held-out shots fitted on a --window: best-fit (default) or central "
                           "(the plausible strikes' central rest)"},
               {"intent", "what the held-out shots were meant to do, a prior for --window "
-                         "predictions: none (default), three-cushion (the UMB point) or pot (a ball "
-                         "pocketed, the struck ball kept up)"},
+                         "predictions: none (default), three-cushion (the UMB point) or pot "
+                         "(a ball pocketed, the struck ball kept up)"},
               {"read_cloth", "read the cloth (mu_roll, mu_slide) from the training shots' "
                              "tracks and start from it"},
               {"huber", "Huber's scale in metres, [0, 1]: false detections pull the fit as "

@@ -51,7 +51,8 @@ Played Play(const TableModel& model, const TableState& before, int cue, const Cu
 }
 
 TableState TwoBalls(const TableModel& model, Vector2d cue, Vector2d object) {
-  return testing::Layout(model, {Placed{"cue", cue.x(), cue.y()}, Placed{"1", object.x(), object.y()}});
+  return testing::Layout(model,
+                         {Placed{"cue", cue.x(), cue.y()}, Placed{"1", object.x(), object.y()}});
 }
 
 // A straight pot into the corner: a stun shot pockets the 1 and stops; the same shot with
