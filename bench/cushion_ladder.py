@@ -78,7 +78,8 @@ tracks (`--cushion-on-read-cloth`, the calibration the docs recommend for predic
   around the table with heavy side spin; billiards.md, "A real carom table"), @RECORDED_SHOTS@ of
   them held out (`--no-synthetic --recordings DIR --fit-elevation --predict central --intent
   three-cushion --cushion-on-read-cloth`): the whole-shot fit with the preset's constants
-  (mm), then the predicted rest and rails as above. Two shots rank nothing, and the carom
+  (mm) and the share of shots whose fitted struck ball meets the first three rails the track
+  shows, then the predicted rest and rails as above. Two shots rank nothing, and the carom
   preset's cloth, cushion and spin-down were read and calibrated on these four shots: its
   columns here are not held out from its constants (the cushion on the read cloth is, fitted
   on the two training shots alone).
@@ -123,7 +124,7 @@ def predictions(scoring_csv, recorded_csv):
 
     lines = [
         "| model | scoring shots: preset (mm, rails) | cushion on read cloth (mm, rails) "
-        "| public carom shots: fit, preset (mm) | predicted, preset (mm, rails) "
+        "| public carom shots: fit, preset (mm, rails) | predicted, preset (mm, rails) "
         "| predicted, cushion on read cloth (mm, rails) | CPU per shot |",
         "|---|---:|---:|---:|---:|---:|---:|",
     ]
@@ -134,7 +135,8 @@ def predictions(scoring_csv, recorded_csv):
         rp = row(recorded, model, "preset", recorded_csv)
         rr = row(recorded, model, "cushion_on_read_cloth", recorded_csv)
         lines.append("| %s | %s | %s | %s | %s | %s | %s us |" % (
-            label, cell(sp), cell(sr), rp["fit_mm"], cell(rp), cell(rr), sp["cpu_us"]))
+            label, cell(sp), cell(sr), "%s, %.0f %%" % (rp["fit_mm"], 100 * float(rp["fit_rails"])),
+            cell(rp), cell(rr), sp["cpu_us"]))
     # What the default, Han's, does against the 40 cm goal, said from the numbers.
     han = [(source, constants, float(row(rows, "han", constants, path)["predict_final_mm"]))
            for source, rows, path in (("the scoring shots", scoring, scoring_csv),

@@ -1822,6 +1822,7 @@ namespace {
 // its mean: the slope's standard error is the noise over its square root).
 struct LineFit {
   double slope = 0.0, sxx = 0.0;
+  double mean_t = 0.0, mean_y = 0.0;  // the line passes through (mean_t, mean_y)
   int n = 0;
 };
 LineFit FitLine(std::span<const double> t, std::span<const double> y) {
@@ -1835,6 +1836,8 @@ LineFit FitLine(std::span<const double> t, std::span<const double> y) {
   }
   mt /= f.n;
   my /= f.n;
+  f.mean_t = mt;
+  f.mean_y = my;
   double sxy = 0.0;
   for (int i = 0; i < f.n; ++i) {
     const double dt = t[static_cast<size_t>(i)] - mt;
@@ -1844,6 +1847,30 @@ LineFit FitLine(std::span<const double> t, std::span<const double> y) {
   if (f.sxx <= 0.0) return f;
   f.slope = sxy / f.sxx;
   return f;
+}
+
+// Whether a bounce off a rail lies in a gap of the track next to sample k (the samples' times
+// t and distances from the rail g): where the tracker lost the ball at the cushion (frames
+// dropped there, as a camera's often are near a rail), the sample nearest the bounce can lie
+// farther from the rail than a step. For a contact between samples c and c + 1 (c = k - 1 or
+// k), the ball's distance into it and out of it are each a line through the three samples on
+// that side; they meet where the ball turned, which is a bounce when it is within near_m of the
+// contact distance `reach` and between the two samples.
+bool BounceInAGap(std::span<const double> t, std::span<const double> g, int k, double reach,
+                  double near_m) {
+  const int n = static_cast<int>(t.size());
+  for (const int c : {k - 1, k}) {
+    if (c < 2 || c + 3 >= n) continue;
+    const size_t uc = static_cast<size_t>(c);
+    const LineFit in = FitLine(t.subspan(uc - 2, 3), g.subspan(uc - 2, 3));
+    const LineFit out = FitLine(t.subspan(uc + 1, 3), g.subspan(uc + 1, 3));
+    if (!(in.slope < 0.0 && out.slope > 0.0)) continue;
+    const double turn = (out.mean_y - in.mean_y + in.slope * in.mean_t - out.slope * out.mean_t) /
+                        (in.slope - out.slope);
+    const double at = in.mean_y + in.slope * (turn - in.mean_t);
+    if (turn >= t[uc] && turn <= t[uc + 1] && std::abs(at - reach) <= near_m) return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -1875,9 +1902,13 @@ std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recordi
     for (int k = 1; k + 1 < n; ++k) {
       const size_t uk = static_cast<size_t>(k);
       // The sample nearest a bounce is within half a step of the contact (more, for a fast
-      // ball), and the least distance within the window (the first of equal ones).
+      // ball), or the bounce lies in a gap of the track beside it; and it is the least
+      // distance within the window (the first of equal ones).
       const double step = std::max((p[uk] - p[uk - 1]).norm(), (p[uk + 1] - p[uk]).norm());
-      if (gap[uk] > reach + std::max(near_m, 0.6 * step)) continue;
+      if (gap[uk] > reach + std::max(near_m, 0.6 * step) &&
+          !BounceInAGap(t, gap, k, reach, near_m)) {
+        continue;
+      }
       int lo = k, hi = k;
       while (lo > 0 && t[uk] - t[static_cast<size_t>(lo - 1)] <= window_s) --lo;
       while (hi + 1 < n && t[static_cast<size_t>(hi + 1)] - t[uk] <= window_s) ++hi;

@@ -331,7 +331,9 @@ Rail NearestRail(const TableSpec& spec, const Eigen::Vector2d& xy);
 /// distance falls before it and rises after it, each trend a least-squares line over the
 /// window, significant at `z` standard errors of the tracker's noise (estimated from the
 /// track's second differences), so a resting or sliding-along ball seen through noise is not
-/// a bounce.
+/// a bounce. Where the tracker lost the ball at the cushion (frames dropped beside the
+/// sample), the lines through the three samples on either side of the gap meeting within
+/// `near_m` of the contact distance, inside the gap, stand for the sample's nearness.
 std::vector<Rail> TrackedRails(const TableModel& model, const Recording& recording, int ball,
                                double near_m = 0.03, double window_s = 0.3, double z = 4.0);
 
