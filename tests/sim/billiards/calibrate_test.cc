@@ -213,20 +213,48 @@ TEST(CalibrateTest, TrackedRailsAreTheShotsCushions) {
 // A camera tracker often loses a ball at a cushion for a few frames (a real carom track drops
 // 100 ms at one rail, and its nearest sample lies 6 cm off the rail). The same 150 shots with
 // every ball's samples dropped for 100 ms around each of its cushion hits (the hole starting
-// 20-80 ms before the hit; a hit within 0.25 s of another, or leaving slower than 0.3 m/s, is
-// left alone, as 50 Hz could not tell it apart anyway): the rails are still read, from where
-// the ball's paths into and out of the hole meet.
+// 20-80 ms before the hit; the tracks with a hit within 0.25 s of another, or leaving slower
+// than 0.3 m/s, left out, as 50 Hz could not tell those apart anyway): the rails are still
+// read, from where the ball's paths into and out of the hole meet. And holes as long anywhere
+// else in a track (three a ball, none within 0.15 s of a cushion hit) read no bounce that is
+// not there.
 TEST(CalibrateTest, TrackedRailsReadABounceATrackerLost) {
   const TableModel truth = *TableModel::Create(TrueTable());
   std::mt19937_64 rng(11);
   std::mt19937_64 hole_rng(5);
   std::uniform_real_distribution<double> u(0.02, 0.08);
-  int tracks = 0, same = 0, holes = 0;
+  std::uniform_real_distribution<double> anywhere(0.0, 1.0);
+  int tracks = 0, same = 0, holes = 0, elsewhere_same = 0;
+  // The ball's track without the samples of the 100 ms holes starting at `starts`.
+  const auto without = [](const Recording& rec, int ball, const std::vector<double>& starts) {
+    Recording lost = rec;
+    lost.track.clear();
+    for (const TrackPoint& q : rec.track) {
+      bool dropped = false;
+      for (double a : starts) dropped = dropped || (q.ball == ball && q.t_s > a && q.t_s < a + 0.1);
+      if (!dropped) lost.track.push_back(q);
+    }
+    return lost;
+  };
   for (int i = 0; i < 150; ++i) {
     const RecordedShot played = RandomRecordedShot(truth, rng, i);
     const Recording* rec = &played.rec;
     const ShotResult* shot = &played.shot;
     for (int b = 0; b < 3; ++b) {
+      const std::vector<Rail> simulated = SimulatedRails(truth.spec(), shot->events, b);
+      std::vector<double> all_hits;
+      for (const Event& e : shot->events) {
+        if (e.kind == EventKind::kBallCushion && e.a == b) all_hits.push_back(e.t_s);
+      }
+      std::vector<double> away;
+      while (away.size() < 3) {
+        const double a = anywhere(hole_rng) * rec->track.back().t_s;
+        bool near = false;
+        for (double h : all_hits) near = near || (h > a - 0.15 && h < a + 0.25);
+        if (!near) away.push_back(a);
+      }
+      elsewhere_same += TrackedRails(truth, without(*rec, b, away), b) == simulated;
+
       std::vector<double> hits;
       bool clear = true;
       for (const Event& e : shot->events) {
@@ -237,23 +265,18 @@ TEST(CalibrateTest, TrackedRailsReadABounceATrackerLost) {
         hits.push_back(e.t_s);
       }
       if (hits.empty() || !clear) continue;
-      Recording lost = *rec;
-      lost.track.clear();
       std::vector<double> starts;
       for (double h : hits) starts.push_back(h - u(hole_rng));
-      for (const TrackPoint& q : rec->track) {
-        bool dropped = false;
-        for (double a : starts) dropped = dropped || (q.ball == b && q.t_s > a && q.t_s < a + 0.1);
-        if (!dropped) lost.track.push_back(q);
-      }
       holes += static_cast<int>(hits.size());
       ++tracks;
-      same += TrackedRails(truth, lost, b) == SimulatedRails(truth.spec(), shot->events, b);
+      same += TrackedRails(truth, without(*rec, b, starts), b) == simulated;
     }
   }
-  std::printf("rails read through %d holes: %d of %d tracks\n", holes, same, tracks);
+  std::printf("rails read through %d holes: %d of %d tracks; with holes elsewhere, %d of 450\n",
+              holes, same, tracks, elsewhere_same);
   EXPECT_GT(holes, 150);
   EXPECT_GE(same, tracks * 95 / 100);
+  EXPECT_GE(elsewhere_same, 450 * 97 / 100);
 }
 
 // A ball struck on endless cloth slides, its acceleration mu_slide g against its slip, until
