@@ -133,22 +133,29 @@ std::vector<Recording> Recordings(const TableModel& truth, int n, double noise_m
   return out;
 }
 
-// The rails tests' i-th random shot (its layout and strike drawn from rng): its recording at
-// 50 Hz with 1 mm of noise, and the engine's shot.
-struct RecordedShot {
-  Recording rec;
-  ShotResult shot;
-};
-RecordedShot RandomRecordedShot(const TableModel& truth, std::mt19937_64& rng, int i) {
-  const TableState layout = RandomLayout(truth, rng);
-  const CueStrike strike = RandomStrike(layout, rng);
-  RecordedShot out;
-  const SyntheticOptions tracker{.noise_m = 1e-3, .seed = static_cast<uint64_t>(i + 1)};
-  out.rec = SyntheticRecording(truth, SolverOptions{}, layout, 0, strike, tracker).value();
-  TableState s = layout;
-  EXPECT_TRUE(ApplyStrike(truth, 0, strike, 0, &s).ok());
-  out.shot = SimulateShot(truth, SolverOptions{}, s, ShotOptions{}).value();
-  return out;
+// A cushion event's ball's speed off the rail after it (m/s, signed along the rail's axis).
+double NormalSpeedAfter(const TableSpec& spec, const Event& e) {
+  const Rail r = NearestRail(spec, e.ra);
+  return r == Rail::kPlusX || r == Rail::kMinusX ? e.va.x() : e.va.y();
+}
+
+// The rails tests' tracks: every ball of 150 random shots (layouts and strikes from one
+// seeded generator), recorded at 50 Hz with 1 mm of noise. f(shot, recording, the engine's
+// shot, ball, the rails the engine's cushion events say the ball met).
+template <typename F>
+void ForEachRandomTrack(const TableModel& truth, F f) {
+  std::mt19937_64 rng(11);
+  for (int i = 0; i < 150; ++i) {
+    const TableState layout = RandomLayout(truth, rng);
+    const CueStrike strike = RandomStrike(layout, rng);
+    const SyntheticOptions tracker{.noise_m = 1e-3, .seed = static_cast<uint64_t>(i + 1)};
+    const Recording rec =
+        SyntheticRecording(truth, SolverOptions{}, layout, 0, strike, tracker).value();
+    TableState s = layout;
+    ASSERT_TRUE(ApplyStrike(truth, 0, strike, 0, &s).ok());
+    const ShotResult shot = SimulateShot(truth, SolverOptions{}, s, ShotOptions{}).value();
+    for (int b = 0; b < 3; ++b) f(i, rec, shot, b, SimulatedRails(truth.spec(), shot.events, b));
+  }
 }
 
 // The rails a ball meets, read from its track alone (50 Hz, 1 mm noise), are the ones the
@@ -158,34 +165,28 @@ RecordedShot RandomRecordedShot(const TableModel& truth, std::mt19937_64& rng, i
 // through the noise, meets none.
 TEST(CalibrateTest, TrackedRailsAreTheShotsCushions) {
   const TableModel truth = *TableModel::Create(TrueTable());
-  std::mt19937_64 rng(11);
   int tracks = 0, same = 0;
   size_t rails = 0;
-  for (int i = 0; i < 150; ++i) {
-    const RecordedShot played = RandomRecordedShot(truth, rng, i);
-    const Recording* rec = &played.rec;
-    const ShotResult* shot = &played.shot;
-    for (int b = 0; b < 3; ++b) {
-      const std::vector<Rail> simulated = SimulatedRails(truth.spec(), shot->events, b);
-      rails += simulated.size();
-      ++tracks;
-      if (TrackedRails(truth, *rec, b) == simulated) {
-        ++same;
-        continue;
-      }
-      // What 50 Hz and a millimetre of noise cannot resolve.
-      bool unresolvable = false;
-      double last_t = -1.0;
-      for (const Event& e : shot->events) {
-        if (e.kind != EventKind::kBallCushion || e.a != b) continue;
-        const Rail r = NearestRail(truth.spec(), e.ra);
-        const double vn = r == Rail::kPlusX || r == Rail::kMinusX ? e.va.x() : e.va.y();
-        unresolvable = unresolvable || std::abs(vn) < 0.2 || (last_t >= 0 && e.t_s - last_t < 0.1);
-        last_t = e.t_s;
-      }
-      EXPECT_TRUE(unresolvable) << "shot " << i << ", ball " << b;
+  ForEachRandomTrack(truth, [&](int i, const Recording& rec, const ShotResult& shot, int b,
+                                const std::vector<Rail>& simulated) {
+    rails += simulated.size();
+    ++tracks;
+    if (TrackedRails(truth, rec, b) == simulated) {
+      ++same;
+      return;
     }
-  }
+    // What 50 Hz and a millimetre of noise cannot resolve.
+    bool unresolvable = false;
+    double last_t = -1.0;
+    for (const Event& e : shot.events) {
+      if (e.kind != EventKind::kBallCushion || e.a != b) continue;
+      unresolvable = unresolvable || std::abs(NormalSpeedAfter(truth.spec(), e)) < 0.2 ||
+                     (last_t >= 0 && e.t_s - last_t < 0.1);
+      last_t = e.t_s;
+    }
+    EXPECT_TRUE(unresolvable) << "shot " << i << ", ball " << b;
+  });
+  EXPECT_EQ(tracks, 450);
   EXPECT_GT(rails, 500u);  // the shots do meet cushions
   EXPECT_GE(same, tracks * 97 / 100);
 
@@ -220,7 +221,6 @@ TEST(CalibrateTest, TrackedRailsAreTheShotsCushions) {
 // not there.
 TEST(CalibrateTest, TrackedRailsReadABounceATrackerLost) {
   const TableModel truth = *TableModel::Create(TrueTable());
-  std::mt19937_64 rng(11);
   std::mt19937_64 hole_rng(5);
   std::uniform_real_distribution<double> u(0.02, 0.08);
   std::uniform_real_distribution<double> anywhere(0.0, 1.0);
@@ -236,42 +236,31 @@ TEST(CalibrateTest, TrackedRailsReadABounceATrackerLost) {
     }
     return lost;
   };
-  for (int i = 0; i < 150; ++i) {
-    const RecordedShot played = RandomRecordedShot(truth, rng, i);
-    const Recording* rec = &played.rec;
-    const ShotResult* shot = &played.shot;
-    for (int b = 0; b < 3; ++b) {
-      const std::vector<Rail> simulated = SimulatedRails(truth.spec(), shot->events, b);
-      std::vector<double> all_hits;
-      for (const Event& e : shot->events) {
-        if (e.kind == EventKind::kBallCushion && e.a == b) all_hits.push_back(e.t_s);
-      }
-      std::vector<double> away;
-      while (away.size() < 3) {
-        const double a = anywhere(hole_rng) * rec->track.back().t_s;
-        bool near = false;
-        for (double h : all_hits) near = near || (h > a - 0.15 && h < a + 0.25);
-        if (!near) away.push_back(a);
-      }
-      elsewhere_same += TrackedRails(truth, without(*rec, b, away), b) == simulated;
-
-      std::vector<double> hits;
-      bool clear = true;
-      for (const Event& e : shot->events) {
-        if (e.kind != EventKind::kBallCushion || e.a != b) continue;
-        const Rail r = NearestRail(truth.spec(), e.ra);
-        const double vn = r == Rail::kPlusX || r == Rail::kMinusX ? e.va.x() : e.va.y();
-        clear = clear && std::abs(vn) >= 0.3 && (hits.empty() || e.t_s - hits.back() >= 0.25);
-        hits.push_back(e.t_s);
-      }
-      if (hits.empty() || !clear) continue;
-      std::vector<double> starts;
-      for (double h : hits) starts.push_back(h - u(hole_rng));
-      holes += static_cast<int>(hits.size());
-      ++tracks;
-      same += TrackedRails(truth, without(*rec, b, starts), b) == simulated;
+  ForEachRandomTrack(truth, [&](int, const Recording& rec, const ShotResult& shot, int b,
+                                const std::vector<Rail>& simulated) {
+    std::vector<double> hits;
+    bool clear = true;
+    for (const Event& e : shot.events) {
+      if (e.kind != EventKind::kBallCushion || e.a != b) continue;
+      clear = clear && std::abs(NormalSpeedAfter(truth.spec(), e)) >= 0.3 &&
+              (hits.empty() || e.t_s - hits.back() >= 0.25);
+      hits.push_back(e.t_s);
     }
-  }
+    std::vector<double> away;
+    while (away.size() < 3) {
+      const double a = anywhere(hole_rng) * rec.track.back().t_s;
+      bool near = false;
+      for (double h : hits) near = near || (h > a - 0.15 && h < a + 0.25);
+      if (!near) away.push_back(a);
+    }
+    elsewhere_same += TrackedRails(truth, without(rec, b, away), b) == simulated;
+    if (hits.empty() || !clear) return;
+    std::vector<double> starts;
+    for (double h : hits) starts.push_back(h - u(hole_rng));
+    holes += static_cast<int>(hits.size());
+    ++tracks;
+    same += TrackedRails(truth, without(rec, b, starts), b) == simulated;
+  });
   std::printf("rails read through %d holes: %d of %d tracks; with holes elsewhere, %d of 450\n",
               holes, same, tracks, elsewhere_same);
   EXPECT_GT(holes, 150);
