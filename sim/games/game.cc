@@ -289,6 +289,15 @@ int ShotFacts::BallsReachingCushion(int except) const {
   return n;
 }
 
+ShotFacts ExtractFacts(const TableState& before, int struck,
+                       std::span<const billiards::Event> events) {
+  ShotRecord record;
+  record.struck = struck;
+  record.before = before;
+  record.events.assign(events.begin(), events.end());
+  return ExtractFacts(record);
+}
+
 ShotFacts ExtractFacts(const ShotRecord& record) {
   ShotFacts f;
   f.struck = record.struck;

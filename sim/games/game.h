@@ -179,6 +179,10 @@ struct ShotFacts {
 
 /// Gathers the facts of a shot (pure; any order of equal-time events gives the same facts).
 ShotFacts ExtractFacts(const ShotRecord& record);
+/// The same from the table before the shot, the struck ball and the shot's events, as a
+/// billiards::ShotIntent sees a shot.
+ShotFacts ExtractFacts(const TableState& before, int struck,
+                       std::span<const billiards::Event> events);
 
 // ---------------------------------------------------------------------------------------------
 // Verdicts, game events and the game state.

@@ -799,11 +799,7 @@ absl::StatusOr<std::vector<Ball>> PoolRack(GameKind game, const TableModel& mode
 billiards::ShotIntent PotIntent() {
   return [](const TableState& before, int cue, std::span<const billiards::Event> events) {
     if (cue < 0 || static_cast<size_t>(cue) >= before.balls.size()) return false;
-    ShotRecord record;
-    record.struck = cue;
-    record.before = before;
-    record.events.assign(events.begin(), events.end());
-    const ShotFacts facts = ExtractFacts(record);
+    const ShotFacts facts = ExtractFacts(before, cue, events);
     if (facts.first_contacts.empty() || facts.Pocketed(cue)) return false;
     return std::any_of(facts.pocketed.begin(), facts.pocketed.end(), [&](const Pocketing& p) {
       return p.ball != cue && p.pocket >= 0;

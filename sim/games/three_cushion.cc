@@ -305,11 +305,7 @@ bool ThreeCushionPoint(const ShotFacts& facts, int own, int obj_a, int obj_b) {
 billiards::ShotIntent ThreeCushionIntent() {
   return [](const TableState& before, int cue, std::span<const billiards::Event> events) {
     if (before.balls.size() != 3 || cue < 0 || cue > 2) return false;
-    ShotRecord record;
-    record.struck = cue;
-    record.before = before;
-    record.events.assign(events.begin(), events.end());
-    return ThreeCushionPoint(ExtractFacts(record), cue, (cue + 1) % 3, (cue + 2) % 3);
+    return ThreeCushionPoint(ExtractFacts(before, cue, events), cue, (cue + 1) % 3, (cue + 2) % 3);
   };
 }
 

@@ -57,7 +57,9 @@ TableState TwoBalls(const TableModel& model, Vector2d cue, Vector2d object) {
 
 // A straight pot into the corner: a stun shot pockets the 1 and stops; the same shot with
 // follow sends the cue ball after it (a scratch), and the same line four degrees off
-// misses the pocket. Neither of these is a pot as meant, nor is anything on a carom table.
+// misses the pocket. Neither of these is a pot as meant. And the definition's edges on given
+// events: a ball leaving an open table is no pot, nor a ball that drops untouched by the
+// struck ball's shot (no contact), nor any shot of a ball the table does not have.
 TEST(PotIntentTest, IsAPotThatKeepsTheStruckBallUp) {
   const TableModel model = PoolModel();
   const auto [cue, object] = LineUp(model, Vector2d(0.8, 0.3), "top_right", 0.25);
@@ -79,13 +81,20 @@ TEST(PotIntentTest, IsAPotThatKeepsTheStruckBallUp) {
   EXPECT_EQ(miss.dropped, 0);
   EXPECT_FALSE(miss.pots);
 
-  // A carom table has no pockets: its balls never drop.
-  absl::StatusOr<billiards::TableSpec> carom = billiards::MakeTablePreset("carom");
-  ASSERT_TRUE(carom.ok());
-  absl::StatusOr<TableModel> carom_model = TableModel::Create(*carom);
-  ASSERT_TRUE(carom_model.ok());
-  const TableState c = TwoBalls(*carom_model, Vector2d(0.0, 0.0), Vector2d(0.5, 0.0));
-  EXPECT_FALSE(Play(*carom_model, c, 0, {.speed_mps = 3.0, .ball_speed = true}).pots);
+  using billiards::Event;
+  using billiards::EventKind;
+  const Event hit{.t_s = 0.2, .kind = EventKind::kBallBall, .a = 0, .b = 1};
+  const Event drop{.t_s = 0.5, .kind = EventKind::kBallPocket, .a = 1, .other = 2};
+  const Event scratch{.t_s = 0.6, .kind = EventKind::kBallPocket, .a = 0, .other = 3};
+  const Event off{.t_s = 0.5, .kind = EventKind::kBallPocket, .a = 1, .other = -1};
+  const std::vector<Event> pot = {hit, drop}, both = {hit, drop, scratch}, away = {hit, off},
+                           untouched = {drop};
+  EXPECT_TRUE(PotIntent()(s, 0, pot));
+  EXPECT_FALSE(PotIntent()(s, 0, both));
+  EXPECT_FALSE(PotIntent()(s, 0, away));
+  EXPECT_FALSE(PotIntent()(s, 0, untouched));
+  EXPECT_FALSE(PotIntent()(s, 2, pot));
+  EXPECT_FALSE(PotIntent()(s, -1, pot));
 }
 
 // A prediction from a pot's first 0.4 s with the pool player's intent: twenty long pots on a
